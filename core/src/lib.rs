@@ -1,0 +1,36 @@
+//! # ssvr-core
+//!
+//! Sliding-vibrating response (SSVR) of an elastic structure on a friction base: a top mass `m1` on a
+//! spring and dashpot over a sliding base `m2` with Coulomb friction `μ(m1+m2)g`.
+//!
+//! * [`structure`]: the validated [`Structure`] and its derived quantities (M, p, a, ζ, n, ε, ε').
+//! * [`free_vibration`]: the exact free vibration of the relative motion (the building block of every
+//!   method), evaluated robustly in all three damping regimes.
+//! * [`fourier_series`]: the trapezoid (TFM, eq 14-18) and rectangular (RFM, eq 20-22) Fourier methods.
+//! * [`duhamel_closed_form`]: the rectangular Duhamel method (RDM, eq 36) generalised to any train of
+//!   friction reversals.
+//! * [`duhamel_recursion`]: eq (36) as an exact O(1)-per-sample recursion (the estimator).
+//!
+//! The library is `#![no_std]`, allocates nothing and never panics on any input: every fallible
+//! operation returns a typed [`Error`].
+#![no_std]
+#![deny(missing_docs)]
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
+
+#[cfg(any(test, feature = "std"))]
+extern crate std;
+
+pub mod duhamel_closed_form;
+pub mod duhamel_recursion;
+pub mod error;
+pub mod fourier_series;
+pub mod free_vibration;
+pub mod math;
+pub mod structure;
+
+pub use duhamel_closed_form::{Reversal, ReversalTrain};
+pub use error::{Error, Param};
+pub use structure::{Regime, Structure, StructureParams};

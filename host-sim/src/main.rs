@@ -1,0 +1,2 @@
+//! host-sim: the host-side simulator and harness.
+fn main() {}
