@@ -1,0 +1,90 @@
+//! Shared harness: run the recursion over a reversal train and compare it with the closed form.
+#![allow(dead_code)]
+
+use ssvr_core::duhamel_closed_form::{DuhamelClosedForm, ReversalTrain};
+use ssvr_core::duhamel_recursion::{DuhamelRecursion, TrainFeeder};
+use ssvr_core::math::{Real, Transcendentals};
+use ssvr_core::{Structure, StructureParams};
+
+pub fn structure(m1: f64, m2: f64, f_hz: f64, xi: f64) -> Structure {
+    Structure::new(StructureParams {
+        m1_kg: m1,
+        m2_kg: m2,
+        natural_frequency_hz: f_hz,
+        damping_ratio: xi,
+        friction_coefficient: 0.2,
+        gravity_m_s2: 9.80665,
+    })
+    .unwrap()
+}
+
+/// Errors of one run, in units of max(gμ, peak |ü1|).
+#[derive(Debug, Clone, Copy)]
+pub struct RunErrors {
+    pub max: f64,
+    pub rms: f64,
+    pub first_tenth: f64,
+    pub last_tenth: f64,
+    pub compared: usize,
+    pub scale: f64,
+}
+
+/// Run `n` samples; compare every `stride`-th sample, every sample within ±3 of a reversal and the
+/// last 1000 samples with the closed form.
+pub fn run<T: Real, M: Transcendentals<T>, const K: usize>(
+    s: &Structure,
+    rate: f64,
+    train: &ReversalTrain<'_>,
+    n: u64,
+    stride: u64,
+) -> RunErrors {
+    train.validate().unwrap();
+    let mut est = DuhamelRecursion::<T, M, K>::new(s, rate).unwrap();
+    let cf = DuhamelClosedForm::new(s);
+    let mut feeder = TrainFeeder::new(rate);
+    let mut errs: Vec<(u64, f64)> = Vec::new();
+    let mut peak: f64 = 0.0;
+    let mut near_until = 0u64;
+    for k in 0..n {
+        let pushed = feeder.feed(train, &mut est, k).unwrap();
+        if pushed > 0 {
+            near_until = k + 3;
+        }
+        // Look ahead: the next reversal within 3 samples.
+        let next_soon = train
+            .get(feeder.pushed())
+            .is_some_and(|r| r.time_s <= (k + 3) as f64 / rate);
+        let y = est.update().to_f64();
+        if k % stride == 0 || k <= near_until || next_soon || k + 1000 >= n {
+            let t = k as f64 / rate;
+            let want = cf.accel(train, t);
+            peak = peak.max(want.abs());
+            errs.push((k, (y - want).abs()));
+        }
+    }
+    let scale = s.gmu().max(peak);
+    let tenth = n / 10;
+    let max_in = |lo: u64, hi: u64| {
+        errs.iter()
+            .filter(|(k, _)| *k >= lo && *k < hi)
+            .map(|e| e.1)
+            .fold(0.0f64, f64::max)
+            / scale
+    };
+    RunErrors {
+        max: errs.iter().map(|e| e.1).fold(0.0, f64::max) / scale,
+        rms: (errs.iter().map(|e| e.1 * e.1).sum::<f64>() / errs.len() as f64).sqrt() / scale,
+        first_tenth: max_in(0, tenth),
+        last_tenth: max_in(n - tenth, n),
+        compared: errs.len(),
+        scale,
+    }
+}
+
+pub fn paper_train(half: f64) -> ReversalTrain<'static> {
+    ReversalTrain::Periodic {
+        first_s: 0.0,
+        half_period_s: half,
+        initial_sign: 1.0,
+    }
+}

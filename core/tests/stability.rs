@@ -1,0 +1,175 @@
+//! The stability suite of the Duhamel recursion against the generalised eq (36) in f64.
+//! Bounds: max error / max(gμ, peak |ü1|) ≤ 1e-5 in f32 and ≤ 1e-10 in f64 on every case.
+mod common;
+use common::*;
+use ssvr_core::duhamel_closed_form::ReversalTrain;
+use ssvr_core::math::{Libm, Micromath};
+use ssvr_core::Structure;
+
+const F32_BOUND: f64 = 1e-5;
+const F64_BOUND: f64 = 1e-10;
+
+fn both(name: &str, s: &Structure, rate: f64, train: &ReversalTrain<'_>, n: u64, stride: u64) {
+    let e32 = run::<f32, Libm, 256>(s, rate, train, n, stride);
+    let e64 = run::<f64, Libm, 256>(s, rate, train, n, stride);
+    println!(
+        "{name}: f32 max {:.3e} rms {:.3e} (first tenth {:.3e}, last {:.3e}); f64 max {:.3e} rms {:.3e}; {} compared",
+        e32.max, e32.rms, e32.first_tenth, e32.last_tenth, e64.max, e64.rms, e64.compared
+    );
+    assert!(e32.max <= F32_BOUND, "{name}: f32 error {:e}", e32.max);
+    assert!(e64.max <= F64_BOUND, "{name}: f64 error {:e}", e64.max);
+}
+
+fn table1(xi: f64) -> Structure {
+    structure(29.5, 1.75, 7.0, xi)
+}
+
+#[test]
+fn undamped_1e6_samples() {
+    both(
+        "undamped",
+        &table1(0.0),
+        1e4,
+        &paper_train(0.0715),
+        1_000_000,
+        101,
+    );
+}
+
+#[test]
+fn critical_exactly_and_within_1e9() {
+    // M = 4: Mξ² = 4ξ².
+    for (label, xi) in [
+        ("critical", 0.5),
+        ("critical-1e-9", 0.5 * (1.0f64 - 1e-9).sqrt()),
+        ("critical+1e-9", 0.5 * (1.0f64 + 1e-9).sqrt()),
+    ] {
+        both(
+            label,
+            &structure(3.0, 1.0, 7.0, xi),
+            1e4,
+            &paper_train(0.0715),
+            50_000,
+            1,
+        );
+    }
+}
+
+#[test]
+fn overdamped_m_xi2_9() {
+    // M = 36, ξ = 0.5: Mξ² = 9.
+    both(
+        "M xi^2 = 9",
+        &structure(35.0, 1.0, 7.0, 0.5),
+        1e4,
+        &paper_train(0.0715),
+        50_000,
+        1,
+    );
+}
+
+#[test]
+fn vanishing_base_mass() {
+    both(
+        "m2/m1 = 1e-9",
+        &structure(1.0, 1e-9, 7.0, 0.05),
+        1e4,
+        &paper_train(0.0715),
+        50_000,
+        1,
+    );
+}
+
+#[test]
+fn sampling_at_1mhz() {
+    both(
+        "1 MHz",
+        &table1(0.05),
+        1e6,
+        &paper_train(0.0715),
+        2_000_000,
+        37,
+    );
+}
+
+#[test]
+fn coarse_sampling_n_dt_3_6() {
+    let s = table1(0.05);
+    let rate = s.n().unwrap() / 3.6;
+    both("n dt = 3.6", &s, rate, &paper_train(0.0715), 20_000, 1);
+}
+
+#[test]
+fn resonant_lightly_damped() {
+    let s = table1(0.001);
+    let half = std::f64::consts::PI / s.n().unwrap();
+    both("xi 0.001 resonant", &s, 1e4, &paper_train(half), 200_000, 3);
+}
+
+#[test]
+fn irregular_sub_sample_reversals() {
+    // Deterministic pseudo-random gaps of 0.3 to 700 samples, at sub-sample offsets, including
+    // several reversals inside one sample and one exactly on a sample.
+    let rate = 1e4;
+    let mut times = vec![0.0, 0.5e-4, 0.7e-4, 0.75e-4, 2.0e-4];
+    let mut x: u64 = 0x2545F4914F6CDD1D;
+    while *times.last().unwrap() < 9.0 {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        let gap = 0.3 + (x % 7000) as f64 / 10.0;
+        times.push(times.last().unwrap() + gap / rate);
+    }
+    let train = ReversalTrain::Alternating {
+        times_s: &times,
+        initial_sign: -1.0,
+    };
+    for (label, s) in [
+        ("irregular under", table1(0.05)),
+        ("irregular critical", structure(3.0, 1.0, 7.0, 0.5)),
+        ("irregular over", structure(35.0, 1.0, 7.0, 0.5)),
+    ] {
+        both(label, &s, rate, &train, 90_000, 1);
+    }
+}
+
+#[test]
+fn ten_million_samples_ten_thousand_reversals() {
+    both(
+        "1e7 samples",
+        &table1(0.05),
+        1e4,
+        &paper_train(0.1),
+        10_000_000,
+        211,
+    );
+}
+
+#[test]
+fn error_does_not_grow_with_run_length() {
+    for (label, s, half) in [
+        ("undamped", table1(0.0), 0.0715),
+        ("damped", table1(0.05), 0.0715),
+    ] {
+        let e = run::<f32, Libm, 256>(&s, 1e4, &paper_train(half), 1_000_000, 13);
+        println!(
+            "{label}: first tenth {:.3e}, last tenth {:.3e}",
+            e.first_tenth, e.last_tenth
+        );
+        assert!(
+            e.last_tenth <= 2.0 * e.first_tenth + 2e-7,
+            "{label}: error grows: {:e} -> {:e}",
+            e.first_tenth,
+            e.last_tenth
+        );
+    }
+}
+
+#[test]
+fn micromath_switch_is_measured() {
+    let s = table1(0.05);
+    let e = run::<f32, Micromath, 256>(&s, 1e4, &paper_train(0.0715), 100_000, 1);
+    println!("micromath: max {:.3e} rms {:.3e}", e.max, e.rms);
+    // micromath's approximations are coarser: the bound is what we measured, with margin.
+    assert!(e.max <= 1e-3, "micromath error {:e}", e.max);
+}
