@@ -110,38 +110,45 @@ impl<T: Real, const K: usize> Coefficients<T, K> {
 }
 
 /// State of the recursion (apart from its coefficients).
+///
+/// Exact part: `anchor` (f64, block start) and `contrib` (the reversals of the current block,
+/// anchored at block sample `kc`); they are combined only at block ends, with the exact f64 block
+/// transition for `anchor`, so no table rounding ever accumulates. Per-sample part: `current`, the
+/// state at block sample `kc` rounded to T, and `j = k − kc`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct State<T> {
-    /// Anchor state (w0, w1) at the first sample of the block, f64. Only ever multiplied by the
-    /// exact f64 block transition, so it accumulates no rounding from the table.
+    /// Anchor state (w0, w1) at the first sample of the block, f64.
     anchor: [f64; 2],
-    /// The anchor rounded to T for the per-sample expression.
-    anchor_t: [T; 2],
-    /// State contributed by the reversals of the current block, anchored at sample `kc` of it.
+    /// State contributed by the reversals of the current block, at block sample `kc`.
     contrib: [T; 2],
+    /// The whole state at block sample `kc`, rounded to T (the per-sample expression uses it).
+    current: [T; 2],
     /// s·gμ: the friction part of ü1.
     base: T,
     /// Friction level s (units of F0).
     level: T,
     /// Samples since the block start (0..=K).
     k: usize,
-    /// Samples since `contrib`'s anchor (0..=k).
+    /// Samples since block sample `kc` (0..=k).
     j: usize,
-    /// Index of the sample the next update returns.
-    sample: u64,
+    /// Block sample of the last reversal (0 if none).
+    kc: usize,
+    /// Number of completed blocks.
+    blocks: u64,
 }
 
 impl<T: Real> Default for State<T> {
     fn default() -> Self {
         Self {
             anchor: [0.0; 2],
-            anchor_t: [T::ZERO; 2],
             contrib: [T::ZERO; 2],
+            current: [T::ZERO; 2],
             base: T::ZERO,
             level: T::ZERO,
             k: 0,
             j: 0,
-            sample: 0,
+            kc: 0,
+            blocks: 0,
         }
     }
 }
@@ -192,34 +199,51 @@ impl<T: Real, M: Transcendentals<T>, const K: usize> DuhamelRecursion<T, M, K> {
     #[inline]
     pub fn update(&mut self) -> T {
         if self.state.k >= K {
-            self.end_block();
+            return self.update_after_block_end();
         }
         let st = &mut self.state;
-        let y = match (self.coef.out.get(st.k), self.coef.out.get(st.j)) {
-            (Some(a), Some(c)) => {
-                st.base
-                    + a[0] * st.anchor_t[0]
-                    + a[1] * st.anchor_t[1]
-                    + (c[0] * st.contrib[0] + c[1] * st.contrib[1])
-            }
-            _ => st.base,
+        let y = match self.coef.out.get(st.j) {
+            Some(a) => st.base + a[0] * st.current[0] + a[1] * st.current[1],
+            None => st.base,
         };
         st.k += 1;
         st.j += 1;
-        st.sample += 1;
         y
     }
 
-    /// Process a block of samples: `out[i]` is the prediction of sample i (no reversal inside).
+    #[cold]
+    #[inline(never)]
+    fn update_after_block_end(&mut self) -> T {
+        self.end_block();
+        self.update()
+    }
+
+    /// Process a block of samples with no reversal inside: `out[i]` is the prediction of the i-th
+    /// sample from the current one. Same results as calling [`Self::update`] `out.len()` times.
     pub fn update_block(&mut self, out: &mut [T]) {
-        for y in out {
-            *y = self.update();
+        let mut out = out;
+        while !out.is_empty() {
+            if self.state.k >= K {
+                self.end_block();
+            }
+            let st = &mut self.state;
+            let n = out.len().min(K - st.k);
+            let (head, tail) = out.split_at_mut(n);
+            let (base, c0, c1) = (st.base, st.current[0], st.current[1]);
+            let Some(rows) = self.coef.out.get(st.j..st.j + n) else {
+                return;
+            };
+            for (y, a) in head.iter_mut().zip(rows) {
+                *y = base + a[0] * c0 + a[1] * c1;
+            }
+            st.k += n;
+            st.j += n;
+            out = tail;
         }
     }
 
     /// Ψ(j·Δt)·v in f64 with the table (j < K) or the exact block transition (j = K).
-    fn propagate(&self, j: usize, v: [T; 2]) -> [f64; 2] {
-        let (v0, v1) = (v[0].to_f64(), v[1].to_f64());
+    fn propagate(&self, j: usize, v0: f64, v1: f64) -> [f64; 2] {
         if let (Some(o), Some(r)) = (self.coef.out.get(j), self.coef.row1.get(j)) {
             [
                 o[0].to_f64() * v0 + o[1].to_f64() * v1,
@@ -236,15 +260,17 @@ impl<T: Real, M: Transcendentals<T>, const K: usize> DuhamelRecursion<T, M, K> {
     #[cold]
     #[inline(never)]
     fn end_block(&mut self) {
-        let [a, b, c, d] = self.coef.advance;
-        let (w0, w1) = (self.state.anchor[0], self.state.anchor[1]);
-        let extra = self.propagate(self.state.j, self.state.contrib);
+        let st = self.state;
+        let w = self.propagate(K, st.anchor[0], st.anchor[1]);
+        let c = self.propagate(K - st.kc, st.contrib[0].to_f64(), st.contrib[1].to_f64());
         let st = &mut self.state;
-        st.anchor = [a * w0 + b * w1 + extra[0], c * w0 + d * w1 + extra[1]];
-        st.anchor_t = [T::from_f64(st.anchor[0]), T::from_f64(st.anchor[1])];
+        st.anchor = [w[0] + c[0], w[1] + c[1]];
+        st.current = [T::from_f64(st.anchor[0]), T::from_f64(st.anchor[1])];
         st.contrib = [T::ZERO; 2];
         st.k = 0;
         st.j = 0;
+        st.kc = 0;
+        st.blocks += 1;
     }
 
     /// A friction reversal: the friction level (units of F0 = μ(m1+m2)g: +1, −1, or 0 when the base
@@ -272,22 +298,21 @@ impl<T: Real, M: Transcendentals<T>, const K: usize> DuhamelRecursion<T, M, K> {
         if self.state.k >= K {
             self.end_block();
         }
-        // Move the block's contribution to the current sample (small: a few gμ at most).
-        let here = if self.state.j == 0 {
-            [
-                self.state.contrib[0].to_f64(),
-                self.state.contrib[1].to_f64(),
-            ]
-        } else {
-            self.propagate(self.state.j, self.state.contrib)
-        };
+        let st = self.state;
+        // The block's reversal contributions, moved to the current sample (small: a few gμ).
+        let c = self.propagate(st.k - st.kc, st.contrib[0].to_f64(), st.contrib[1].to_f64());
+        // The anchor's part at the current sample (used rounded, for this block only).
+        let w = self.propagate(st.k, st.anchor[0], st.anchor[1]);
         let f = self.coef.kernel.eval::<M>(age_samples * self.coef.dt);
         let g = -(jump * self.coef.gmu);
-        let st = &mut self.state;
-        st.contrib = [
-            T::from_f64(here[0] + (g * f.ecm).to_f64()),
-            T::from_f64(here[1] + (g * self.coef.m_omega0 * f.es).to_f64()),
+        let c = [
+            c[0] + (g * f.ecm).to_f64(),
+            c[1] + (g * self.coef.m_omega0 * f.es).to_f64(),
         ];
+        let st = &mut self.state;
+        st.contrib = [T::from_f64(c[0]), T::from_f64(c[1])];
+        st.current = [T::from_f64(w[0] + c[0]), T::from_f64(w[1] + c[1])];
+        st.kc = st.k;
         st.j = 0;
         st.level = level;
         st.base = level * self.coef.gmu;
@@ -301,7 +326,7 @@ impl<T: Real, M: Transcendentals<T>, const K: usize> DuhamelRecursion<T, M, K> {
 
     /// Index of the sample the next [`Self::update`] returns.
     pub fn sample_index(&self) -> u64 {
-        self.state.sample
+        self.state.blocks * K as u64 + self.state.k as u64
     }
 }
 
@@ -343,5 +368,88 @@ impl TrainFeeder {
     /// Number of reversals pushed so far.
     pub fn pushed(&self) -> usize {
         self.next
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::structure::StructureParams;
+    use std::vec::Vec;
+
+    fn table1() -> Structure {
+        Structure::new(StructureParams {
+            m1_kg: 29.5,
+            m2_kg: 1.75,
+            natural_frequency_hz: 7.0,
+            damping_ratio: 0.05,
+            friction_coefficient: 0.2,
+            gravity_m_s2: 9.80665,
+        })
+        .unwrap()
+    }
+
+    #[test]
+    fn block_processing_equals_sample_processing() {
+        let s = table1();
+        let mut a = Estimator32::new(&s, 1e4).unwrap();
+        let mut b = a.clone();
+        let mut ya = Vec::new();
+        let mut yb = std::vec![0.0f32; 0];
+        for (i, len) in [3usize, 700, 1, 256, 513].iter().enumerate() {
+            let level = if i % 2 == 0 { 1.0 } else { -1.0 };
+            a.push_reversal(level, 0.25).unwrap();
+            b.push_reversal(level, 0.25).unwrap();
+            for _ in 0..*len {
+                ya.push(a.update());
+            }
+            let mut blk = std::vec![0.0f32; *len];
+            b.update_block(&mut blk);
+            yb.extend_from_slice(&blk);
+        }
+        assert_eq!(ya, yb);
+        assert_eq!(a.sample_index(), b.sample_index());
+        assert_eq!(a.sample_index(), 3 + 700 + 1 + 256 + 513);
+    }
+
+    #[test]
+    fn bad_events_are_typed_errors() {
+        let mut e = Estimator64::new(&table1(), 1e4).unwrap();
+        assert_eq!(
+            e.push_reversal(1.0, -0.5).unwrap_err().param(),
+            Param::EventTime
+        );
+        assert_eq!(
+            e.push_reversal(f64::NAN, 0.5).unwrap_err(),
+            Error::NotFinite(Param::ReversalSign)
+        );
+        assert_eq!(
+            e.push_reversal(2.0, 0.5).unwrap_err().param(),
+            Param::ReversalSign
+        );
+        assert_eq!(
+            Estimator64::new(&table1(), 0.0).unwrap_err().param(),
+            Param::SampleRate
+        );
+        // Nothing was changed by the rejected events.
+        assert_eq!(e.update(), 0.0);
+    }
+
+    #[test]
+    fn reversal_on_a_sample_is_continuous_and_steps_to_gmu() {
+        let s = table1();
+        let mut e = Estimator64::new(&s, 1e4).unwrap();
+        e.push_reversal(1.0, 0.0).unwrap();
+        assert!(e.update().abs() < 1e-15);
+        // m2 -> 0: the response jumps to gμ within a sample (eq 39).
+        let tiny = Structure::new(StructureParams {
+            m2_kg: 1e-9,
+            ..*table1().params()
+        })
+        .unwrap();
+        let mut e = Estimator64::new(&tiny, 1e4).unwrap();
+        e.push_reversal(-1.0, 0.0).unwrap();
+        e.update();
+        assert!((e.update() + tiny.gmu()).abs() < 1e-6 * tiny.gmu());
     }
 }
