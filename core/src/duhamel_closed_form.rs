@@ -103,7 +103,7 @@ impl<'a> ReversalTrain<'a> {
                 half_period_s,
                 ..
             } => {
-                if !(t >= first_s) {
+                if t.is_nan() || t < first_s {
                     return None;
                 }
                 let mut k = libm::floor((t - first_s) / half_period_s);
@@ -150,7 +150,7 @@ impl<'a> ReversalTrain<'a> {
                 initial_sign,
             } => Some(Reversal {
                 time_s: first_s + j as f64 * half_period_s,
-                level: if j % 2 == 0 {
+                level: if j.is_multiple_of(2) {
                     initial_sign
                 } else {
                     -initial_sign
@@ -161,7 +161,7 @@ impl<'a> ReversalTrain<'a> {
                 initial_sign,
             } => times_s.get(j).map(|&t| Reversal {
                 time_s: t,
-                level: if j % 2 == 0 {
+                level: if j.is_multiple_of(2) {
                     initial_sign
                 } else {
                     -initial_sign

@@ -91,7 +91,7 @@ impl Tfm {
         check_input(amplitude, period)?;
         let omega = 2.0 * PI / period;
         let beta = s.beta(omega);
-        if !(beta * amplitude > s.gmu()) {
+        if beta.is_nan() || beta * amplitude <= s.gmu() {
             let r = omega / s.p();
             let xi = s.xi();
             // Fixed-base absolute acceleration transfer (p² + 2iξpω)/(p² − ω² + 2iξpω).

@@ -269,7 +269,8 @@ mod tests {
 
     #[test]
     fn each_bad_parameter_is_named() {
-        let cases: [(fn(&mut StructureParams), Param); 9] = [
+        type Case = (fn(&mut StructureParams), Param);
+        let cases: [Case; 9] = [
             (|p| p.m1_kg = 0.0, Param::M1),
             (|p| p.m1_kg = f64::NAN, Param::M1),
             (|p| p.m2_kg = -1.0, Param::M2),

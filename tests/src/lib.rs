@@ -1,4 +1,7 @@
-//! Cross-crate integration tests live in `tests/tests/`; this library holds their shared data.
+//! Cross-crate integration tests live in `tests/tests/`; this library holds their shared data
+//! and the independent reference integrator [`ode`] of the equations of motion (1)-(2).
+
+pub mod ode;
 
 /// One row of the paper's Table 2 (units as printed: s, gal).
 #[derive(Debug, Clone, Copy)]
