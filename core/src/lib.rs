@@ -29,6 +29,7 @@ pub mod error;
 pub mod fourier_series;
 pub mod free_vibration;
 pub mod math;
+pub mod reversal_detector;
 pub mod structure;
 
 pub use duhamel_closed_form::{Reversal, ReversalTrain};
