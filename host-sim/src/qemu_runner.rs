@@ -161,7 +161,9 @@ pub fn write_sensor_log(path: &Path, header: &LogHeader, samples: &[LogSample]) 
 
 /// `firmware/` next to this crate (`host-sim/../firmware`).
 pub fn default_firmware_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join("firmware")
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("..")
+        .join("firmware")
 }
 
 /// Environment variables a parent cargo (e.g. `cargo test`) sets or honours that must not leak
@@ -321,8 +323,14 @@ pub fn run_qemu_output(elf: &Path, log_path: &Path, timeout: Duration) -> Result
         .stderr(Stdio::piped())
         .spawn()
         .context("cannot start qemu-system-arm (apt-get install qemu-system-arm)")?;
-    let mut out = child.stdout.take().ok_or_else(|| anyhow!("no stdout pipe"))?;
-    let mut err = child.stderr.take().ok_or_else(|| anyhow!("no stderr pipe"))?;
+    let mut out = child
+        .stdout
+        .take()
+        .ok_or_else(|| anyhow!("no stdout pipe"))?;
+    let mut err = child
+        .stderr
+        .take()
+        .ok_or_else(|| anyhow!("no stderr pipe"))?;
     let out_reader = std::thread::spawn(move || {
         let mut v = Vec::new();
         let _ = out.read_to_end(&mut v);
@@ -378,11 +386,7 @@ pub fn run_qemu(elf: &Path, log_path: &Path, timeout: Duration) -> Result<Vec<u8
         };
         bail!(
             "QEMU {} (status {:?}); last firmware messages:\n{}\nQEMU stderr:\n{}",
-            if out.timed_out {
-                "timed out"
-            } else {
-                "failed"
-            },
+            if out.timed_out { "timed out" } else { "failed" },
             out.status,
             messages,
             tail(&String::from_utf8_lossy(&out.stderr), 20)
@@ -436,11 +440,9 @@ impl DecodedFrame {
 
     /// The value of a `key=value` field of the message.
     pub fn field(&self, key: &str) -> Option<&str> {
-        self.message.split_whitespace().find_map(|w| {
-            w.split_once('=')
-                .filter(|(k, _)| *k == key)
-                .map(|(_, v)| v)
-        })
+        self.message
+            .split_whitespace()
+            .find_map(|w| w.split_once('=').filter(|(k, _)| *k == key).map(|(_, v)| v))
     }
 
     fn parse<T: std::str::FromStr>(&self, key: &str) -> Option<T> {
