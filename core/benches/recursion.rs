@@ -2,7 +2,9 @@
 //! the closed form with 10, 10^3 and 10^4 past reversals (undamped: every term is kept).
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use ssvr_core::duhamel_closed_form::{DuhamelClosedForm, ReversalTrain};
-use ssvr_core::duhamel_recursion::{Estimator32, Estimator32Micromath, Estimator64};
+use ssvr_core::duhamel_recursion::{
+    Estimator32, Estimator32Libm, Estimator32Micromath, Estimator64,
+};
 use ssvr_core::{Structure, StructureParams};
 
 fn table1(xi: f64) -> Structure {
@@ -63,11 +65,19 @@ fn recursion(c: &mut Criterion) {
     let mut g = c.benchmark_group("recursion_reversal");
     g.throughput(Throughput::Elements(1));
     let mut level = 1.0f32;
-    g.bench_function("f32_libm_reversal_plus_update", |b| {
+    g.bench_function("f32_poly_reversal_plus_update", |b| {
         b.iter(|| {
             level = -level;
             e32.push_reversal(level, black_box(0.37)).unwrap();
             black_box(e32.update())
+        })
+    });
+    let mut el = Estimator32Libm::new(&s, 1e4).unwrap();
+    g.bench_function("f32_libm_reversal_plus_update", |b| {
+        b.iter(|| {
+            level = -level;
+            el.push_reversal(level, black_box(0.37)).unwrap();
+            black_box(el.update())
         })
     });
     let mut em = Estimator32Micromath::new(&s, 1e4).unwrap();

@@ -41,6 +41,7 @@ pub const MAX_AGE_SAMPLES: f64 = 16_777_216.0;
 
 /// Coefficients of the recursion, computed once (in f64) from a structure and a sample rate.
 #[derive(Debug, Clone)]
+#[repr(C)]
 pub struct Coefficients<T, const K: usize> {
     /// Output row (Ψ00, Ψ01) at kΔt, k = 0..K.
     out: [[T; 2]; K],
@@ -116,38 +117,46 @@ impl<T: Real, const K: usize> Coefficients<T, K> {
 /// transition for `anchor`, so no table rounding ever accumulates. Per-sample part: `current`, the
 /// state at block sample `kc` rounded to T, and `j = k − kc`.
 #[derive(Debug, Clone, Copy, PartialEq)]
+#[repr(C)]
 pub struct State<T> {
-    /// Anchor state (w0, w1) at the first sample of the block, f64.
-    anchor: [f64; 2],
-    /// State contributed by the reversals of the current block, at block sample `kc`.
-    contrib: [T; 2],
+    /// Samples since block sample `kc` (the block sample is k = kc + j, 0..=K).
+    j: usize,
+    /// K − kc: the block ends when j reaches it.
+    limit: usize,
     /// The whole state at block sample `kc`, rounded to T (the per-sample expression uses it).
     current: [T; 2],
     /// s·gμ: the friction part of ü1.
     base: T,
     /// Friction level s (units of F0).
     level: T,
-    /// Samples since the block start (0..=K).
-    k: usize,
-    /// Samples since block sample `kc` (0..=k).
-    j: usize,
     /// Block sample of the last reversal (0 if none).
     kc: usize,
+    /// Whether `contrib` holds a reversal of this block.
+    has_contrib: bool,
+    /// State contributed by the reversals of the current block, at block sample `kc`.
+    contrib: [T; 2],
+    /// The anchor rounded to T (used at reversals).
+    anchor_t: [T; 2],
+    /// Anchor state (w0, w1) at the first sample of the block, f64.
+    anchor: [f64; 2],
     /// Number of completed blocks.
     blocks: u64,
 }
 
-impl<T: Real> Default for State<T> {
-    fn default() -> Self {
+impl<T: Real> State<T> {
+    /// At rest, no friction, at the start of a block of `block_len` samples.
+    fn at_rest(block_len: usize) -> Self {
         Self {
             anchor: [0.0; 2],
+            anchor_t: [T::ZERO; 2],
             contrib: [T::ZERO; 2],
             current: [T::ZERO; 2],
             base: T::ZERO,
             level: T::ZERO,
-            k: 0,
             j: 0,
             kc: 0,
+            limit: block_len,
+            has_contrib: false,
             blocks: 0,
         }
     }
@@ -156,17 +165,24 @@ impl<T: Real> Default for State<T> {
 /// The estimator: predicts top-mass acceleration ü1 (m/s²) sample by sample from friction
 /// reversals. `T` is the precision of the per-sample arithmetic, `M` the transcendental functions
 /// used at reversals, `K` the block length between exact anchors (table of `K` entries).
+// repr(C), state first: the per-sample fields sit at small offsets from the estimator's address and
+// the output table right after them (saves the offset arithmetic on the M4F).
 #[derive(Debug, Clone)]
+#[repr(C)]
 pub struct DuhamelRecursion<T: Real, M: Transcendentals<T> = Libm, const K: usize = 256> {
-    coef: Coefficients<T, K>,
     state: State<T>,
+    coef: Coefficients<T, K>,
     _m: PhantomData<M>,
 }
 
-/// The firmware default: f32 with libm transcendentals.
-pub type Estimator32 = DuhamelRecursion<f32, Libm, 256>;
-/// f32 with micromath transcendentals.
+/// The firmware default: f32 with micromath transcendentals at reversals (pure f32: ~270
+/// instructions per reversal on the M4F, against ~2500 with libm, whose f32 functions use f64
+/// internally; same accuracy at the small arguments of a reversal, see docs/PERFORMANCE.md).
+pub type Estimator32 = DuhamelRecursion<f32, crate::math::F32Poly, 256>;
+/// f32 with micromath transcendentals (the same as [`Estimator32`]).
 pub type Estimator32Micromath = DuhamelRecursion<f32, crate::math::Micromath, 256>;
+/// f32 with libm transcendentals.
+pub type Estimator32Libm = DuhamelRecursion<f32, Libm, 256>;
 /// The f64 estimator.
 pub type Estimator64 = DuhamelRecursion<f64, Libm, 256>;
 
@@ -175,7 +191,7 @@ impl<T: Real, M: Transcendentals<T>, const K: usize> DuhamelRecursion<T, M, K> {
     pub fn new(structure: &Structure, sample_rate_hz: f64) -> Result<Self, Error> {
         Ok(Self {
             coef: Coefficients::new(structure, sample_rate_hz)?,
-            state: State::default(),
+            state: State::at_rest(K),
             _m: PhantomData,
         })
     }
@@ -192,13 +208,13 @@ impl<T: Real, M: Transcendentals<T>, const K: usize> DuhamelRecursion<T, M, K> {
 
     /// Back to rest, sample 0, no friction.
     pub fn reset(&mut self) {
-        self.state = State::default();
+        self.state = State::at_rest(K);
     }
 
     /// The prediction of ü1 (m/s²) at the current sample; then advance one sample.
     #[inline]
     pub fn update(&mut self) -> T {
-        if self.state.k >= K {
+        if self.state.j >= self.state.limit {
             return self.update_after_block_end();
         }
         let st = &mut self.state;
@@ -206,7 +222,6 @@ impl<T: Real, M: Transcendentals<T>, const K: usize> DuhamelRecursion<T, M, K> {
             Some(a) => st.base + a[0] * st.current[0] + a[1] * st.current[1],
             None => st.base,
         };
-        st.k += 1;
         st.j += 1;
         y
     }
@@ -223,11 +238,11 @@ impl<T: Real, M: Transcendentals<T>, const K: usize> DuhamelRecursion<T, M, K> {
     pub fn update_block(&mut self, out: &mut [T]) {
         let mut out = out;
         while !out.is_empty() {
-            if self.state.k >= K {
+            if self.state.j >= self.state.limit {
                 self.end_block();
             }
             let st = &mut self.state;
-            let n = out.len().min(K - st.k);
+            let n = out.len().min(st.limit - st.j);
             let (head, tail) = out.split_at_mut(n);
             let (base, c0, c1) = (st.base, st.current[0], st.current[1]);
             let Some(rows) = self.coef.out.get(st.j..st.j + n) else {
@@ -236,7 +251,6 @@ impl<T: Real, M: Transcendentals<T>, const K: usize> DuhamelRecursion<T, M, K> {
             for (y, a) in head.iter_mut().zip(rows) {
                 *y = base + a[0] * c0 + a[1] * c1;
             }
-            st.k += n;
             st.j += n;
             out = tail;
         }
@@ -261,15 +275,20 @@ impl<T: Real, M: Transcendentals<T>, const K: usize> DuhamelRecursion<T, M, K> {
     #[inline(never)]
     fn end_block(&mut self) {
         let st = self.state;
-        let w = self.propagate(K, st.anchor[0], st.anchor[1]);
-        let c = self.propagate(K - st.kc, st.contrib[0].to_f64(), st.contrib[1].to_f64());
+        let mut w = self.propagate(K, st.anchor[0], st.anchor[1]);
+        if st.has_contrib {
+            let c = self.propagate(K - st.kc, st.contrib[0].to_f64(), st.contrib[1].to_f64());
+            w = [w[0] + c[0], w[1] + c[1]];
+        }
         let st = &mut self.state;
-        st.anchor = [w[0] + c[0], w[1] + c[1]];
-        st.current = [T::from_f64(st.anchor[0]), T::from_f64(st.anchor[1])];
+        st.anchor = w;
+        st.anchor_t = [T::from_f64(st.anchor[0]), T::from_f64(st.anchor[1])];
+        st.current = st.anchor_t;
         st.contrib = [T::ZERO; 2];
-        st.k = 0;
+        st.has_contrib = false;
         st.j = 0;
         st.kc = 0;
+        st.limit = K;
         st.blocks += 1;
     }
 
@@ -278,42 +297,58 @@ impl<T: Real, M: Transcendentals<T>, const K: usize> DuhamelRecursion<T, M, K> {
     /// [`Self::update`] returns (a fraction for a sub-sample time; more than 1 for a late detection,
     /// which is back-dated exactly). Push several reversals in chronological order.
     pub fn push_reversal(&mut self, level: T, age_samples: T) -> Result<(), Error> {
-        let (l, age) = (level.to_f64(), age_samples.to_f64());
-        check(
-            Param::ReversalSign,
-            l,
-            (-1.0..=1.0).contains(&l),
-            "a level in [-1, 1]",
-        )?;
-        check(
-            Param::EventTime,
-            age,
-            (0.0..=MAX_AGE_SAMPLES).contains(&age),
-            "0 <= age <= 2^24 samples",
-        )?;
+        // Validation and arithmetic in T: no f64 on the reversal path (soft-float on the M4F).
+        if !level.is_finite() {
+            return Err(Error::NotFinite(Param::ReversalSign));
+        }
+        if level < -T::ONE || level > T::ONE {
+            return Err(out_of_range(
+                Param::ReversalSign,
+                level,
+                "a level in [-1, 1]",
+            ));
+        }
+        if !age_samples.is_finite() {
+            return Err(Error::NotFinite(Param::EventTime));
+        }
+        if age_samples < T::ZERO || age_samples > T::from_f64(MAX_AGE_SAMPLES) {
+            return Err(out_of_range(
+                Param::EventTime,
+                age_samples,
+                "0 <= age <= 2^24 samples",
+            ));
+        }
         let jump = level - self.state.level;
         if jump == T::ZERO {
             return Ok(());
         }
-        if self.state.k >= K {
+        if self.state.j >= self.state.limit {
             self.end_block();
         }
-        let st = self.state;
-        // The block's reversal contributions, moved to the current sample (small: a few gμ).
-        let c = self.propagate(st.k - st.kc, st.contrib[0].to_f64(), st.contrib[1].to_f64());
-        // The anchor's part at the current sample (used rounded, for this block only).
-        let w = self.propagate(st.k, st.anchor[0], st.anchor[1]);
         let f = self.coef.kernel.eval::<M>(age_samples * self.coef.dt);
         let g = -(jump * self.coef.gmu);
-        let c = [
-            c[0] + (g * f.ecm).to_f64(),
-            c[1] + (g * self.coef.m_omega0 * f.es).to_f64(),
-        ];
         let st = &mut self.state;
-        st.contrib = [T::from_f64(c[0]), T::from_f64(c[1])];
-        st.current = [T::from_f64(w[0] + c[0]), T::from_f64(w[1] + c[1])];
-        st.kc = st.k;
+        // The block's reversal contributions, moved to the current sample (small: a few gμ).
+        let mut c = st.contrib;
+        if let (Some(o), Some(r)) = (self.coef.out.get(st.j), self.coef.row1.get(st.j)) {
+            c = [o[0] * c[0] + o[1] * c[1], r[0] * c[0] + r[1] * c[1]];
+        }
+        c[0] += g * f.ecm;
+        c[1] += g * self.coef.m_omega0 * f.es;
+        // The anchor's part at the current sample (rounded; used for this block only — the exact
+        // f64 anchor is advanced separately at the block end).
+        let a = st.anchor_t;
+        let k = st.kc + st.j;
+        let w = match (self.coef.out.get(k), self.coef.row1.get(k)) {
+            (Some(o), Some(r)) => [o[0] * a[0] + o[1] * a[1], r[0] * a[0] + r[1] * a[1]],
+            _ => a,
+        };
+        st.contrib = c;
+        st.current = [w[0] + c[0], w[1] + c[1]];
+        st.kc = k;
+        st.limit = K - k;
         st.j = 0;
+        st.has_contrib = true;
         st.level = level;
         st.base = level * self.coef.gmu;
         Ok(())
@@ -326,7 +361,15 @@ impl<T: Real, M: Transcendentals<T>, const K: usize> DuhamelRecursion<T, M, K> {
 
     /// Index of the sample the next [`Self::update`] returns.
     pub fn sample_index(&self) -> u64 {
-        self.state.blocks * K as u64 + self.state.k as u64
+        self.state.blocks * K as u64 + (self.state.kc + self.state.j) as u64
+    }
+}
+
+fn out_of_range<T: Real>(param: Param, value: T, expected: &'static str) -> Error {
+    Error::OutOfRange {
+        param,
+        value: value.to_f64(),
+        expected,
     }
 }
 

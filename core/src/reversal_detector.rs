@@ -78,7 +78,12 @@ impl DetectorConfig {
     /// Defaults for a displacement noise RMS and sample rate: h = 8σ (at least 1 µm), fits over
     /// 2 ms, stick after 20 ms.
     pub fn for_noise(noise_rms_m: f64, sample_rate_hz: f64) -> Result<Self, Error> {
-        check(Param::SampleRate, sample_rate_hz, sample_rate_hz > 0.0, "> 0 Hz")?;
+        check(
+            Param::SampleRate,
+            sample_rate_hz,
+            sample_rate_hz > 0.0,
+            "> 0 Hz",
+        )?;
         check(Param::EventTime, noise_rms_m, noise_rms_m >= 0.0, ">= 0 m")?;
         let fit = libm::round(2e-3 * sample_rate_hz).clamp(2.0, 64.0) as usize;
         let stick = libm::round(20e-3 * sample_rate_hz).clamp(3.0, 1e6) as usize;
@@ -224,9 +229,8 @@ impl<const N: usize> ReversalDetector<N> {
         let hi = (e + l).min(k);
         let left = fit_vertex(|i| self.at(i), lo, e + 1.min(k - e));
         let right = fit_vertex(|i| self.at(i), e.saturating_sub(1).max(oldest), hi);
-        let guard = |v: Option<(f32, u64)>| {
-            v.filter(|(t, _)| libm::fabsf(*t - e as f32) <= 2.0 + l as f32)
-        };
+        let guard =
+            |v: Option<(f32, u64)>| v.filter(|(t, _)| libm::fabsf(*t - e as f32) <= 2.0 + l as f32);
         match (guard(left), guard(right)) {
             (Some((a, na)), Some((b, nb))) => (a * na as f32 + b * nb as f32) / (na + nb) as f32,
             (Some((a, _)), None) | (None, Some((a, _))) => a,
