@@ -174,13 +174,13 @@ impl Transcendentals<f32> for Micromath {
 #[derive(Debug, Clone, Copy, Default)]
 pub struct F32Poly;
 
-const LN2_HI: f32 = 0.693_115_234_375; // 0x3f317000: 12 significant bits, k·LN2_HI exact for |k| < 2^12
+const LN2_HI: f32 = f32::from_bits(0x3f31_7000); // 0.693115234375: 12 significant bits, k·LN2_HI exact for |k| < 2^12
 const LN2_LO: f32 = 3.194_618_3e-5; // ln 2 − LN2_HI
 const FRAC_2_PI: f32 = core::f32::consts::FRAC_2_PI;
 // π/2 in three parts with trailing zeros: q·P1 and q·P2 are exact for |q| < 2^12.
 const PIO2_1: f32 = 1.570_312_5; // 12 significant bits
-const PIO2_2: f32 = 4.837_512_97e-4; // 12 significant bits
-const PIO2_3: f32 = 7.549_790_1e-8; // the rest of π/2
+const PIO2_2: f32 = f32::from_bits(0x39fd_a000); // 4.8375129699707031e-4, 12 significant bits
+const PIO2_3: f32 = f32::from_bits(0x33a2_2169); // 7.5497901e-8, // the rest of π/2
 
 /// eˣ for f32 without f64: x = k·ln2 + r, |r| ≤ ln2/2, degree-7 Taylor of eʳ, scale by 2^k.
 pub fn exp_f32(x: f32) -> f32 {
@@ -229,7 +229,7 @@ pub fn expm1_f32(x: f32) -> f32 {
 /// (sin x, cos x) for f32 without f64: Cody–Waite reduction by π/2 (accurate for |x| < ~6000),
 /// Taylor polynomials of degree 9 and 10 on |r| ≤ π/4. Larger |x| falls back to `libm`.
 pub fn sin_cos_f32(x: f32) -> (f32, f32) {
-    if !(libm::fabsf(x) < 6000.0) {
+    if x.is_nan() || libm::fabsf(x) >= 6000.0 {
         return libm::sincosf(x);
     }
     let q = libm::roundf(x * FRAC_2_PI);

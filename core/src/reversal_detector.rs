@@ -300,12 +300,12 @@ fn fit_vertex(at: impl Fn(u64) -> f32, lo: u64, hi: u64) -> Option<(f32, u64)> {
     };
     let m = [s0, s1, s2, s1, s2, s3, s2, s3, s4];
     let d = det3(m);
-    if !(d.abs() > 0.0) {
+    if d.is_nan() || d == 0.0 {
         return None;
     }
     let c1 = det3([s0, sy, s2, s1, suy, s3, s2, su2y, s4]) / d;
     let c2 = det3([s0, s1, sy, s1, s2, suy, s2, s3, su2y]) / d;
-    if !(c2.abs() > 0.0) {
+    if c2.is_nan() || c2 == 0.0 {
         return None;
     }
     let v = c - c1 / (2.0 * c2);
