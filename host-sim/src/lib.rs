@@ -8,5 +8,6 @@
 
 pub mod methods;
 pub mod scene;
+pub mod sensors;
 pub mod table_motion;
 pub mod truth;
