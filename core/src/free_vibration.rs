@@ -63,6 +63,27 @@ impl<T: Real> Kernel<T> {
         }
     }
 
+    /// The kernel of the fixed-base oscillator δ'' + 2ξpδ' + p²δ = 0 (the top mass while the base
+    /// sticks): a = ξp, ω0 = p, underdamped since 0 ≤ ξ < 1 (or critical when ξ rounds to 1).
+    pub fn fixed_base(s: &Structure) -> Self {
+        let (p, xi) = (s.p(), s.xi());
+        let q = (1.0 - xi) * (1.0 + xi);
+        let regime = if q > 0.0 {
+            Regime::Underdamped
+        } else {
+            Regime::Critical
+        };
+        Self {
+            regime,
+            a: T::from_f64(xi * p),
+            omega_d: T::from_f64(p * libm::sqrt(q.max(0.0))),
+            omega0_sq: T::from_f64(p * p),
+            r1: T::from_f64(xi * p),
+            r2: T::from_f64(xi * p),
+            strongly_overdamped: false,
+        }
+    }
+
     /// ω0² = Mp².
     pub fn omega0_sq(&self) -> T {
         self.omega0_sq

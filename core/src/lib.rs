@@ -10,6 +10,7 @@
 //! * [`duhamel_closed_form`]: the rectangular Duhamel method (RDM, eq 36) generalised to any train of
 //!   friction reversals.
 //! * [`duhamel_recursion`]: eq (36) as an exact O(1)-per-sample recursion (the estimator).
+//! * [`duhamel_truncated`]: eq (36) truncated to the K newest reversals (O(K) per sample; a baseline).
 //!
 //! The library is `#![no_std]`, allocates nothing and never panics on any input: every fallible
 //! operation returns a typed [`Error`].
@@ -25,11 +26,13 @@ extern crate std;
 
 pub mod duhamel_closed_form;
 pub mod duhamel_recursion;
+pub mod duhamel_truncated;
 pub mod error;
 pub mod fourier_series;
 pub mod free_vibration;
 pub mod math;
 pub mod reversal_detector;
+pub mod stick_slip_estimator;
 pub mod structure;
 
 pub use duhamel_closed_form::{Reversal, ReversalTrain};
