@@ -273,7 +273,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
 
     /// One piece of an interval: from fraction `fa` to `fb` in `phase`, with table accelerations
     /// `u0`, `u1` at the interval's ends; `mu` scales the friction (0: free vibration only).
-    fn piece(&self, z: [T; 2], phase: Phase, fa: T, fb: T, u0: T, u1: T, mu: T) -> [T; 2] {
+    fn piece(&self, z: [T; 2], phase: Phase, (fa, fb): (T, T), (u0, u1): (T, T), mu: T) -> [T; 2] {
         let tau = (fb - fa) * self.dt;
         if phase == 0 {
             let c1 = (u1 - u0) * self.rate;
@@ -316,11 +316,11 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
         } else {
             let (mut z, mut ph, mut fa) = (z, iv.start, T::ZERO);
             for &(fs, next) in iv.sw.iter().take(iv.n as usize) {
-                z = self.piece(z, ph, fa, fs, u0, u1, mu);
+                z = self.piece(z, ph, (fa, fs), (u0, u1), mu);
                 ph = next;
                 fa = fs;
             }
-            self.piece(z, ph, fa, T::ONE, u0, u1, mu)
+            self.piece(z, ph, (fa, T::ONE), (u0, u1), mu)
         }
     }
 
