@@ -4,9 +4,22 @@
 //! * [`scene`]: scene files (TOML, SI units) and earthquake records.
 //! * [`methods`]: TFM/RFM peaks, traces of ü1 and the recursion-against-closed-form check.
 //! * [`table_motion`]: the table (ground) acceleration of a scene.
+//! * [`qemu_runner`]: build, run and decode the firmware's QEMU image; [`qemu_cmd`]: `host-sim
+//!   qemu`, every firmware prediction against the host and the closed form.
+//! * [`run`]: the main job: truth, sensors, reversal detector and the f32 estimator, sample by
+//!   sample, streamed to CSV, with error and detection statistics; [`plot`]: its figure.
+//! * [`bench`]: `host-sim bench`, speed against error of every method; [`reproduce`]: `host-sim
+//!   reproduce`, the paper's Table 2 and figures; [`plots`]: their PNG figures.
 #![deny(missing_docs)]
 
+pub mod bench;
 pub mod methods;
+pub mod plot;
+pub mod plots;
+pub mod qemu_cmd;
+pub mod qemu_runner;
+pub mod reproduce;
+pub mod run;
 pub mod scene;
 pub mod sensors;
 pub mod table_motion;

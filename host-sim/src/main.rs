@@ -1,14 +1,18 @@
 //! host-sim: the host-side simulator and harness.
 //!
-//! `host-sim` with no command prints a summary of the built-in default scene; see `host-sim --help`.
+//! `host-sim` with no command runs `run` on the built-in default scene; see `host-sim --help`.
 
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
 use host_sim::methods::{self, PeakMethod, Precision, TraceMethod, TraceOptions};
+use host_sim::plot;
+use host_sim::run::{self, Interrupted, RunOptions, StickPolicy};
 use host_sim::scene::{Input, Scene};
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
 
 /// Controller-side estimator of base-sliding isolation shake-table tests: host simulator and harness.
 #[derive(Parser, Debug)]
@@ -20,8 +24,13 @@ struct Cli {
 
 #[derive(Subcommand, Debug)]
 enum Command {
-    // Slot for `Run` (the main job on a scene: truth, sensors, estimator); it will become the
-    // default when no command is given.
+    /// The main job (the default command): simulate the exact stick-slip truth, measure it, detect
+    /// the friction reversals in the measured slip and predict ü1 with the firmware's f32
+    /// estimator, sample by sample; stream a CSV row per sample and print a summary.
+    Run(RunArgs),
+    /// The old no-command summary: TFM/RFM peaks and the recursion against the closed form on the
+    /// built-in default scene.
+    Summary,
     /// Steady-state peak of |ü1| of a harmonic scene by the trapezoid or rectangular Fourier method.
     Peak {
         /// Scene file (TOML), or `default` for the built-in default scene.
@@ -67,6 +76,84 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Run the firmware's QEMU image (built for the scene) on the scene's simulated sensor log
+    /// and compare every prediction with the host (same f32 code) and the f64 closed form;
+    /// instruction counts and image sizes. Fails if the firmware differs from the host.
+    Qemu {
+        /// Scene file (TOML); default: the built-in default scene.
+        scene: Option<PathBuf>,
+        /// Print one JSON object.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Speed against error of every method (recursion, closed form, truncated closed form, RFM,
+    /// TFM, truth) on three fixed scenes: a markdown table, bench.json/bench.md and Pareto plots.
+    Bench {
+        /// Shorter scenes and fewer repetitions (under a minute).
+        #[arg(long)]
+        quick: bool,
+        /// Print the rows as JSON (`{"rows": [...]}`) instead of the markdown table.
+        #[arg(long)]
+        json: bool,
+        /// Output folder of the figures, bench.json and bench.md.
+        #[arg(long, default_value = "bench-out")]
+        out: PathBuf,
+    },
+    /// Regenerate the paper's results (Table 2, Figs 6, 9, 10, sliding response spectra) as
+    /// figures and a report.md, sweeps in parallel.
+    Reproduce {
+        /// Output folder.
+        #[arg(long, default_value = "reproduce-out")]
+        out: PathBuf,
+        /// Fewer sweep points and shorter runs (for tests).
+        #[arg(long)]
+        quick: bool,
+    },
+}
+
+/// Arguments of `run`.
+#[derive(clap::Args, Debug)]
+struct RunArgs {
+    /// Scene file (TOML), or `default` (also when omitted) for the built-in default scene.
+    scene: Option<PathBuf>,
+    /// CSV output (default: <scene-stem>.run.csv next to the scene file, or default.run.csv in the
+    /// working directory for the built-in scene).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Print one JSON object instead of the summary.
+    #[arg(long)]
+    json: bool,
+    /// Draw the figure to FILE.svg or FILE.png.
+    #[arg(long, value_name = "FILE")]
+    plot: Option<PathBuf>,
+    /// Length of the plotted window from --plot-from (s); e.g. 1e9 for the whole run.
+    #[arg(long, value_name = "S", default_value_t = host_sim::run::DEFAULT_PLOT_WINDOW_S)]
+    plot_window: f64,
+    /// Start of the plot window (s).
+    #[arg(long, value_name = "S", default_value_t = 0.0)]
+    plot_from: f64,
+    /// What a detected stick does to the estimator: keep the last friction level, or push 0.
+    #[arg(long, value_enum, default_value = "keep")]
+    on_stick: StickPolicy,
+    /// Half-width of the window matching detected to true events (ms).
+    #[arg(long, value_name = "MS", default_value_t = 1e3 * host_sim::run::DEFAULT_MATCH_TOLERANCE_S)]
+    match_tolerance_ms: f64,
+}
+
+impl Default for RunArgs {
+    /// `host-sim run` with no arguments (the clap defaults).
+    fn default() -> Self {
+        Self {
+            scene: None,
+            out: None,
+            json: false,
+            plot: None,
+            plot_window: host_sim::run::DEFAULT_PLOT_WINDOW_S,
+            plot_from: 0.0,
+            on_stick: StickPolicy::Keep,
+            match_tolerance_ms: 1e3 * host_sim::run::DEFAULT_MATCH_TOLERANCE_S,
+        }
+    }
 }
 
 /// Load a scene; `default` (when no such file exists) is the built-in default.
@@ -87,7 +174,9 @@ fn print_json<T: serde::Serialize>(value: &T) -> Result<()> {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        None => summary(),
+        None => run_command(RunArgs::default()),
+        Some(Command::Run(args)) => run_command(args),
+        Some(Command::Summary) => summary(),
         Some(Command::Peak {
             scene,
             method,
@@ -142,6 +231,93 @@ fn run(cli: Cli) -> Result<()> {
                 Ok(())
             }
         }
+        Some(Command::Qemu { scene, json }) => host_sim::qemu_cmd::command(scene.as_deref(), json),
+        Some(Command::Bench { quick, json, out }) => {
+            let report = host_sim::bench::run(&host_sim::bench::BenchOptions {
+                quick,
+                out_dir: out.clone(),
+                progress: true,
+            })?;
+            if json {
+                print_json(&report)
+            } else {
+                print!("{}", host_sim::bench::markdown(&report));
+                println!(
+                    "wrote {}/bench.md, bench.json and pareto-*.png",
+                    out.display()
+                );
+                Ok(())
+            }
+        }
+        Some(Command::Reproduce { out, quick }) => {
+            let report = host_sim::reproduce::run(&host_sim::reproduce::ReproduceOptions {
+                quick,
+                out_dir: out,
+                progress: true,
+            })?;
+            println!("wrote {}", report.display());
+            Ok(())
+        }
+    }
+}
+
+/// Set by Ctrl-C: `run` stops at the next flush and keeps the rows written so far.
+static STOP: AtomicBool = AtomicBool::new(false);
+
+fn run_command(args: RunArgs) -> Result<()> {
+    let start = Instant::now();
+    let scene = match &args.scene {
+        Some(p) => load(p)?,
+        None => Scene::default_scene(),
+    };
+    run::check_runnable(&scene)?;
+    if let Some(p) = &args.plot {
+        plot::format_of(p)?;
+    }
+    let finite = |name: &str, v: f64, ok: bool| -> Result<()> {
+        if v.is_finite() && ok {
+            Ok(())
+        } else {
+            bail!("{name} {v} is out of range")
+        }
+    };
+    finite(
+        "--match-tolerance-ms",
+        args.match_tolerance_ms,
+        args.match_tolerance_ms > 0.0,
+    )?;
+    finite("--plot-from", args.plot_from, args.plot_from >= 0.0)?;
+    finite("--plot-window", args.plot_window, args.plot_window > 0.0)?;
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| run::default_out_path(&scene));
+    let mut opts = RunOptions::new(out.display().to_string());
+    opts.match_tolerance_s = args.match_tolerance_ms / 1e3;
+    opts.on_stick = args.on_stick;
+    if args.plot.is_some() {
+        opts.plot_window = Some((args.plot_from, args.plot_from + args.plot_window));
+    }
+    // Ctrl-C: stop cleanly (a second Ctrl-C while stopping is ignored; the run stops within a
+    // few thousand samples). Failing to install the handler only loses that.
+    let _ = ctrlc::set_handler(|| STOP.store(true, Ordering::Relaxed));
+    let outcome = run::run_to_file(&scene, &out, &opts, &STOP)?;
+    let mut report = outcome.report;
+    if let (Some(path), Some(data)) = (&args.plot, &outcome.plot) {
+        plot::render(data, path)?;
+    }
+    report.runtime_s = start.elapsed().as_secs_f64();
+    if args.json {
+        print_json(&report)
+    } else {
+        let mut text = run::summary_text(&report);
+        if let Some(p) = &args.plot {
+            text += &format!("  plot: {}\n", p.display());
+        }
+        let mut o = std::io::stdout().lock();
+        o.write_all(text.as_bytes())
+            .and_then(|()| o.flush())
+            .context("writing the summary")
     }
 }
 
@@ -195,7 +371,7 @@ fn print_check(r: &methods::CheckReport) {
     );
 }
 
-/// The no-command default: a summary of the built-in default scene.
+/// `host-sim summary`: peaks and the recursion check on the built-in default scene.
 fn summary() -> Result<()> {
     let scene = Scene::default_scene();
     let s = &scene.structure;
@@ -244,7 +420,7 @@ fn summary() -> Result<()> {
             r.rms_err_gmu
         );
     }
-    println!("Commands: host-sim peak | trace | check (host-sim --help).");
+    println!("Commands: host-sim run | summary | peak | trace | check (host-sim --help).");
     Ok(())
 }
 
@@ -261,9 +437,28 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         // A closed pipe (e.g. `| head`) is not an error of ours.
         Err(e) if is_broken_pipe(&e) => ExitCode::SUCCESS,
+        Err(e) if e.downcast_ref::<Interrupted>().is_some() => {
+            eprintln!("host-sim: {e:#}");
+            ExitCode::from(130)
+        }
         Err(e) => {
             eprintln!("host-sim: error: {e:#}");
             ExitCode::FAILURE
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `host-sim` with no command runs `run` with exactly the defaults of `host-sim run`.
+    #[test]
+    fn run_args_default_matches_the_cli_defaults() {
+        let cli = Cli::try_parse_from(["host-sim", "run"]).unwrap();
+        let Some(Command::Run(args)) = cli.command else {
+            panic!("not a run command");
+        };
+        assert_eq!(format!("{args:?}"), format!("{:?}", RunArgs::default()));
     }
 }

@@ -1,12 +1,16 @@
 //! Run the firmware's QEMU image on a sensor log and decode what it streams.
 //!
 //! The firmware (`firmware/`, its own cargo workspace) has a QEMU `mps2-an386` image,
-//! `ssvr-qemu`, that replays a binary sensor log (`firmware/LOG_FORMAT.md`) through the f32
-//! estimator and streams defmt frames over semihosting (QEMU's stdout). This module:
+//! `ssvr-qemu`, that replays a binary sensor log (`firmware/LOG_FORMAT.md`) through its reversal
+//! detector and the f32 estimator and streams defmt frames over semihosting (QEMU's stdout). The
+//! image is built for a scene (`SSVR_SCENE`): structure, rate and detector settings are compiled
+//! in, and the log header must match them. This module:
 //!
 //! * [`write_sensor_log`] / [`encode_sensor_log`]: write a log (format version 1);
-//! * [`build_qemu_image`]: `cargo build --release` in `firmware/`, with the parent cargo's
-//!   target/flags environment removed; returns the ELF path;
+//! * [`firmware_scene_toml`], [`build_for_scene`]: build an image for a [`Scene`] (`cargo build
+//!   --release` in `firmware/` with `SSVR_SCENE` naming a file with the scene's firmware
+//!   parameters, the parent cargo's target/flags environment removed, serialised by a file lock)
+//!   and copy the ELF out; [`build_qemu_image`]: the same for the image's default scene;
 //! * [`run_qemu`]: run the ELF under `qemu-system-arm -icount shift=0` with the log, return the
 //!   raw defmt bytes;
 //! * [`decode_frames`]: decode them with `defmt-decoder` (the firmware uses defmt 1.x, wire
@@ -17,6 +21,7 @@
 //!
 //! Plain functions, no global state; errors are [`anyhow::Error`]s with context.
 
+use crate::scene::Scene;
 use anyhow::{anyhow, bail, Context, Result};
 use ssvr_core::StructureParams;
 use std::io::Read;
@@ -36,6 +41,11 @@ pub const LOG_CHANNELS: u16 = 4;
 pub const RECORD_SATURATED: u8 = 1 << 0;
 /// Record flag: the sample was not acquired.
 pub const RECORD_MISSING: u8 = 1 << 1;
+/// Record flag: the displacement channel was at its full scale (the detector skips it).
+pub const RECORD_DISP_SATURATED: u8 = 1 << 2;
+/// Header option (offset 14): test hook, the firmware takes friction events from the records'
+/// reversal events instead of its detector.
+pub const OPTION_LOG_REVERSALS: u16 = 1 << 0;
 /// Record flag: a reversal event follows the flags byte.
 pub const RECORD_HAS_REVERSAL: u8 = 1 << 7;
 
@@ -55,21 +65,54 @@ pub mod frame_flags {
     pub const REVERSAL_REJECTED: u8 = 1 << 5;
     /// The ADC reported an error (board image).
     pub const ADC_ERROR: u8 = 1 << 6;
+    /// The displacement was unusable (missing, not finite, saturated); the detector repeated its
+    /// last value.
+    pub const DISP_INVALID: u8 = 1 << 7;
 }
+
+/// Kinds of friction events in the firmware's frames (`ev=`).
+pub mod event_kind {
+    /// The base started to slide (pushed to the estimator).
+    pub const SLIP_START: u8 = 1;
+    /// The sliding direction reversed (pushed).
+    pub const REVERSAL: u8 = 2;
+    /// The base stuck (reported, not pushed).
+    pub const STICK: u8 = 3;
+    /// A reversal event of the log (test hook; pushed).
+    pub const LOG: u8 = 4;
+}
+
+/// The name of the firmware's board binary.
+pub const BOARD_BIN: &str = "ssvr-board";
 
 /// The name of the firmware's QEMU binary.
 pub const QEMU_BIN: &str = "ssvr-qemu";
 
-/// The log header: everything the QEMU image needs to build its estimator.
+/// The log header: the scene's sample rate and structure (the image checks them against its
+/// compiled-in scene) and options.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LogHeader {
     /// Sample rate (Hz).
     pub sample_rate_hz: f64,
     /// Structure parameters (m1, m2, natural frequency, ξ, μ, g).
     pub params: StructureParams,
+    /// Bits `OPTION_*` (0: the firmware's detector supplies the friction events).
+    pub options: u16,
 }
 
-/// A friction reversal carried by a record (until the firmware has its own detector).
+impl LogHeader {
+    /// The header of a scene's log (no options).
+    pub fn for_scene(scene: &Scene) -> Self {
+        Self {
+            sample_rate_hz: scene.rate_hz,
+            params: *scene.structure.params(),
+            options: 0,
+        }
+    }
+}
+
+/// A friction reversal carried by a record (used by the firmware only with
+/// [`OPTION_LOG_REVERSALS`], a test hook; the firmware's detector is the default).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LogReversal {
     /// New friction level: +1 or −1 (0 allowed).
@@ -93,6 +136,8 @@ pub struct LogSample {
     pub saturated: bool,
     /// The sample was not acquired (channels meaningless).
     pub missing: bool,
+    /// The displacement channel was at its full scale (implies `saturated` in the log).
+    pub disp_saturated: bool,
     /// A reversal reported with this sample.
     pub reversal: Option<LogReversal>,
 }
@@ -108,7 +153,7 @@ pub fn encode_sensor_log(header: &LogHeader, samples: &[LogSample]) -> Result<Ve
     b.extend_from_slice(&LOG_VERSION.to_le_bytes());
     b.extend_from_slice(&LOG_HEADER_LEN.to_le_bytes());
     b.extend_from_slice(&LOG_CHANNELS.to_le_bytes());
-    b.extend_from_slice(&0u16.to_le_bytes());
+    b.extend_from_slice(&header.options.to_le_bytes());
     let p = &header.params;
     for v in [
         header.sample_rate_hz,
@@ -134,8 +179,11 @@ pub fn encode_sensor_log(header: &LogHeader, samples: &[LogSample]) -> Result<Ve
             b.extend_from_slice(&v.to_le_bytes());
         }
         let mut flags = 0u8;
-        if s.saturated {
+        if s.saturated || s.disp_saturated {
             flags |= RECORD_SATURATED;
+        }
+        if s.disp_saturated {
+            flags |= RECORD_DISP_SATURATED;
         }
         if s.missing {
             flags |= RECORD_MISSING;
@@ -197,21 +245,36 @@ fn leaks_into_nested_cargo(key: &str) -> bool {
     EXACT.contains(&key) || PREFIX.iter().any(|p| key.starts_with(p))
 }
 
-/// Build the QEMU image: `cargo build --release --bin ssvr-qemu` in `firmware_dir` (which has
-/// its own `.cargo/config.toml` selecting `thumbv7em-none-eabihf`), with a clean environment
-/// (no inherited `CARGO_TARGET_DIR`, `RUSTFLAGS`, ... from a parent cargo). Returns the ELF.
+/// Build the QEMU image for its default scene: `cargo build --release --bin ssvr-qemu` in
+/// `firmware_dir` (see [`cargo_build`]). Returns the ELF (in `firmware/target`: a later build
+/// for another scene overwrites it; [`build_for_scene`] copies it out).
 pub fn build_qemu_image(firmware_dir: &Path) -> Result<PathBuf> {
+    cargo_build(firmware_dir, QEMU_BIN, None, None)
+}
+
+/// `cargo build --release --bin <bin> [--no-default-features --features <features>]` in
+/// `firmware_dir` (which has its own `.cargo/config.toml` selecting `thumbv7em-none-eabihf`),
+/// with a clean environment (no inherited `CARGO_TARGET_DIR`, `RUSTFLAGS`, ... from a parent
+/// cargo) and `SSVR_SCENE` set to `scene` (absolute) or removed. Returns the ELF.
+pub fn cargo_build(
+    firmware_dir: &Path,
+    bin: &str,
+    features: Option<&str>,
+    scene: Option<&Path>,
+) -> Result<PathBuf> {
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
     let mut cmd = Command::new(cargo);
-    cmd.current_dir(firmware_dir)
-        .args([
-            "build",
-            "--release",
-            "--bin",
-            QEMU_BIN,
-            "--message-format=json-render-diagnostics",
-        ])
-        .stdin(Stdio::null())
+    cmd.current_dir(firmware_dir).args([
+        "build",
+        "--release",
+        "--bin",
+        bin,
+        "--message-format=json-render-diagnostics",
+    ]);
+    if let Some(f) = features {
+        cmd.args(["--no-default-features", "--features", f]);
+    }
+    cmd.stdin(Stdio::null())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped());
     for (key, _) in std::env::vars_os() {
@@ -221,6 +284,10 @@ pub fn build_qemu_image(firmware_dir: &Path) -> Result<PathBuf> {
             }
         }
     }
+    match scene {
+        Some(p) => cmd.env("SSVR_SCENE", p),
+        None => cmd.env_remove("SSVR_SCENE"),
+    };
     let out = cmd
         .output()
         .with_context(|| format!("cannot run cargo in {}", firmware_dir.display()))?;
@@ -228,7 +295,7 @@ pub fn build_qemu_image(firmware_dir: &Path) -> Result<PathBuf> {
     if !out.status.success() {
         let stderr = String::from_utf8_lossy(&out.stderr);
         bail!(
-            "firmware build failed in {} ({}):\n{}",
+            "firmware build of `{bin}` failed in {} ({}):\n{}",
             firmware_dir.display(),
             out.status,
             tail(&stderr, 60)
@@ -239,17 +306,117 @@ pub fn build_qemu_image(firmware_dir: &Path) -> Result<PathBuf> {
         let Ok(msg) = serde_json::from_str::<serde_json::Value>(line) else {
             continue;
         };
-        if msg["reason"] == "compiler-artifact" && msg["target"]["name"] == QEMU_BIN {
+        if msg["reason"] == "compiler-artifact" && msg["target"]["name"] == bin {
             if let Some(exe) = msg["executable"].as_str() {
                 elf = Some(PathBuf::from(exe));
             }
         }
     }
-    let elf = elf.ok_or_else(|| anyhow!("cargo built no `{QEMU_BIN}` executable"))?;
+    let elf = elf.ok_or_else(|| anyhow!("cargo built no `{bin}` executable"))?;
     if !elf.is_file() {
         bail!("the firmware image {} does not exist", elf.display());
     }
     Ok(elf)
+}
+
+/// The scene parameters the firmware compiles in, as a scene TOML in host-sim's layout (what
+/// `firmware/build.rs` reads): structure, gravity, sample rate, displacement noise and ranges.
+/// Values are written with Rust's round-trip float formatting, so the image gets exactly the
+/// scene's f64 values (and checks log headers against them bit for bit). Two scenes with the
+/// same parameters give the same text, hence the same image without a rebuild.
+pub fn firmware_scene_toml(scene: &Scene) -> String {
+    let p = scene.structure.params();
+    let s = &scene.sensors;
+    format!(
+        "# Written by host-sim (qemu_runner::firmware_scene_toml): the firmware parameters of a scene.\n\
+         gravity_m_s2 = {g:?}\n\n[structure]\nm1_kg = {m1:?}\nm2_kg = {m2:?}\n\
+         natural_frequency_hz = {f:?}\ndamping_ratio = {xi:?}\nfriction_coefficient = {mu:?}\n\n\
+         [sampling]\nrate_hz = {rate:?}\n\n[sensors]\naccel_range_m_s2 = {ar:?}\n\
+         disp_range_m = {dr:?}\ndisp_noise_rms_m = {dn:?}\n",
+        g = p.gravity_m_s2,
+        m1 = p.m1_kg,
+        m2 = p.m2_kg,
+        f = p.natural_frequency_hz,
+        xi = p.damping_ratio,
+        mu = p.friction_coefficient,
+        rate = scene.rate_hz,
+        ar = s.accel_range_m_s2,
+        dr = s.disp_range_m,
+        dn = s.disp_noise_rms_m,
+    )
+}
+
+/// Images built for a scene by [`build_for_scene`].
+#[derive(Debug, Clone)]
+pub struct SceneImages {
+    /// The QEMU image, copied out of `firmware/target`.
+    pub qemu_elf: PathBuf,
+    /// The board image's ELF copy, or why it could not be built for the scene (e.g. a
+    /// non-integer sample rate).
+    pub board_elf: std::result::Result<PathBuf, String>,
+    /// The scene file the images were built with (`SSVR_SCENE`).
+    pub scene_file: PathBuf,
+    /// Wall time of the builds (s).
+    pub build_s: f64,
+}
+
+/// Build the QEMU image (and, with `board`, the board image) for `scene` and copy the ELFs to
+/// `out_dir` (`ssvr-qemu.elf`, `ssvr-board.elf`). The scene's firmware parameters
+/// ([`firmware_scene_toml`]) go to `firmware/target/host-sim/scene.toml` (rewritten only when
+/// they change, so cargo rebuilds only then) and `SSVR_SCENE` names that file. Concurrent calls
+/// (parallel tests) are serialised by an exclusive lock on `firmware/target/host-sim/build.lock`,
+/// held until the ELFs are copied.
+pub fn build_for_scene(
+    firmware_dir: &Path,
+    scene: &Scene,
+    out_dir: &Path,
+    board: bool,
+) -> Result<SceneImages> {
+    let start = Instant::now();
+    let dir = firmware_dir.join("target").join("host-sim");
+    std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let lock_path = dir.join("build.lock");
+    let lock = std::fs::OpenOptions::new()
+        .create(true)
+        .truncate(false)
+        .write(true)
+        .open(&lock_path)
+        .with_context(|| format!("cannot open {}", lock_path.display()))?;
+    lock.lock()
+        .with_context(|| format!("cannot lock {}", lock_path.display()))?;
+    let scene_file = dir.join("scene.toml");
+    let text = firmware_scene_toml(scene);
+    if std::fs::read_to_string(&scene_file).ok().as_deref() != Some(text.as_str()) {
+        std::fs::write(&scene_file, &text)
+            .with_context(|| format!("cannot write {}", scene_file.display()))?;
+    }
+    let scene_file = scene_file
+        .canonicalize()
+        .with_context(|| format!("no scene file at {}", scene_file.display()))?;
+    let built = cargo_build(firmware_dir, QEMU_BIN, None, Some(&scene_file))?;
+    let qemu_elf = out_dir.join(format!("{QEMU_BIN}.elf"));
+    std::fs::copy(&built, &qemu_elf)
+        .with_context(|| format!("cannot copy {} to {}", built.display(), qemu_elf.display()))?;
+    let board_elf = if board {
+        match cargo_build(firmware_dir, BOARD_BIN, Some("board"), Some(&scene_file)) {
+            Ok(built) => {
+                let elf = out_dir.join(format!("{BOARD_BIN}.elf"));
+                std::fs::copy(&built, &elf)
+                    .with_context(|| format!("cannot copy {}", built.display()))?;
+                Ok(elf)
+            }
+            Err(e) => Err(format!("{e:#}")),
+        }
+    } else {
+        Err("not built".to_string())
+    };
+    drop(lock);
+    Ok(SceneImages {
+        qemu_elf,
+        board_elf,
+        scene_file,
+        build_s: start.elapsed().as_secs_f64(),
+    })
 }
 
 fn tail(s: &str, lines: usize) -> String {
@@ -270,10 +437,36 @@ pub struct QemuOutput {
     pub timed_out: bool,
 }
 
+/// The QEMU program: `$QEMU_SYSTEM_ARM`, else `qemu-system-arm`.
+pub fn qemu_program() -> std::ffi::OsString {
+    std::env::var_os("QEMU_SYSTEM_ARM").unwrap_or_else(|| "qemu-system-arm".into())
+}
+
+/// Whether [`qemu_program`] runs (`--version`).
+pub fn qemu_available() -> bool {
+    Command::new(qemu_program())
+        .arg("--version")
+        .stdin(Stdio::null())
+        .output()
+        .map(|o| o.status.success())
+        .unwrap_or(false)
+}
+
+/// An error unless QEMU is installed; the message says how to install it.
+pub fn require_qemu() -> Result<()> {
+    if qemu_available() {
+        Ok(())
+    } else {
+        bail!(
+            "{} not found: run `apt-get install -y qemu-system-arm` (or set QEMU_SYSTEM_ARM)",
+            qemu_program().to_string_lossy()
+        )
+    }
+}
+
 /// The QEMU command line for `elf` (the log is `log_name` relative to the working directory).
 pub fn qemu_command(elf: &Path, log_name: &str) -> Command {
-    let qemu = std::env::var_os("QEMU_SYSTEM_ARM").unwrap_or_else(|| "qemu-system-arm".into());
-    let mut cmd = Command::new(qemu);
+    let mut cmd = Command::new(qemu_program());
     cmd.args([
         "-machine",
         "mps2-an386",
@@ -322,7 +515,12 @@ pub fn run_qemu_output(elf: &Path, log_path: &Path, timeout: Duration) -> Result
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
-        .context("cannot start qemu-system-arm (apt-get install qemu-system-arm)")?;
+        .with_context(|| {
+            format!(
+                "cannot start {} (not installed? run `apt-get install -y qemu-system-arm`)",
+                qemu_program().to_string_lossy()
+            )
+        })?;
     let mut out = child
         .stdout
         .take()
@@ -413,7 +611,26 @@ impl std::fmt::Display for DecodedFrame {
     }
 }
 
-/// A per-sample frame of the firmware (`sample idx=.. flags=.. table=.. ... pred=..`).
+/// The friction event of a frame (`ev=.. level=.. age=..`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FrameEvent {
+    /// One of [`event_kind`].
+    pub kind: u8,
+    /// Friction level after the event (units of μ(m1+m2)g): −1, 0, +1.
+    pub level: i8,
+    /// Samples between the event and this frame's sample.
+    pub age_samples: f32,
+}
+
+impl FrameEvent {
+    /// Whether the firmware pushes this event to the estimator (all but a stick).
+    pub fn pushes(&self) -> bool {
+        self.kind != event_kind::STICK
+    }
+}
+
+/// A per-sample frame of the firmware (`sample idx=.. flags=.. table=.. ... pred=..`, then
+/// `ev=.. level=.. age=..` when the sample has a friction event).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SampleFrame {
     /// Sample index.
@@ -430,6 +647,8 @@ pub struct SampleFrame {
     pub displacement_m: f32,
     /// Top-mass acceleration predicted by the estimator (m/s²).
     pub prediction_m_s2: f32,
+    /// The friction event of this sample.
+    pub event: Option<FrameEvent>,
 }
 
 impl DecodedFrame {
@@ -462,6 +681,14 @@ impl DecodedFrame {
             top_accel_m_s2: self.parse("top")?,
             displacement_m: self.parse("disp")?,
             prediction_m_s2: self.parse("pred")?,
+            event: match self.field("ev") {
+                None => None,
+                Some(_) => Some(FrameEvent {
+                    kind: self.parse("ev")?,
+                    level: self.parse("level")?,
+                    age_samples: self.parse("age")?,
+                }),
+            },
         })
     }
 }
@@ -474,21 +701,25 @@ pub fn decode_frames(elf: &Path, bytes: &[u8]) -> Result<Vec<DecodedFrame>> {
         .with_context(|| format!("cannot read the defmt table of {}", elf.display()))?
         .ok_or_else(|| anyhow!("{} has no defmt data", elf.display()))?;
     let mut decoder = table.new_stream_decoder();
-    decoder.received(bytes);
     let mut frames = Vec::new();
-    loop {
-        match decoder.decode() {
-            Ok(f) => frames.push(DecodedFrame {
-                level: f.level().map(|l| l.as_str().to_string()),
-                message: f.display_message().to_string(),
-            }),
-            Err(defmt_decoder::DecodeError::UnexpectedEof) => break,
-            Err(defmt_decoder::DecodeError::Malformed) => {
-                if !table.encoding().can_recover() {
-                    bail!(
-                        "malformed defmt frame after {} frames (raw encoding)",
-                        frames.len()
-                    );
+    // Fed in chunks: the stream decoder drains its buffer from the front, which is quadratic in
+    // the buffered length (a 320 000-frame stream took a minute in one piece).
+    for chunk in bytes.chunks(4096) {
+        decoder.received(chunk);
+        loop {
+            match decoder.decode() {
+                Ok(f) => frames.push(DecodedFrame {
+                    level: f.level().map(|l| l.as_str().to_string()),
+                    message: f.display_message().to_string(),
+                }),
+                Err(defmt_decoder::DecodeError::UnexpectedEof) => break,
+                Err(defmt_decoder::DecodeError::Malformed) => {
+                    if !table.encoding().can_recover() {
+                        bail!(
+                            "malformed defmt frame after {} frames (raw encoding)",
+                            frames.len()
+                        );
+                    }
                 }
             }
         }
@@ -527,6 +758,14 @@ pub struct InstructionCounts {
     pub reversal_ticks: u32,
     /// Reversals the estimator rejected during the benchmark.
     pub reversal_errors: u32,
+    /// Instructions of the reversal detector per sample in its steady state (sliding, a new
+    /// extremum every sample), generator loop removed.
+    pub detector_instructions_per_sample: Option<f64>,
+    /// Extra instructions of a sample where the detector reports a reversal (vertex fits).
+    pub detector_instructions_per_reversal: Option<f64>,
+    /// Instructions of the firmware's whole per-sample step (flags, detector, estimator, frame;
+    /// no I/O) in the steady sliding state.
+    pub pipeline_instructions_per_sample: Option<f64>,
 }
 
 /// Extract the instruction counts from the `icount` messages. Computed on the host from the raw
@@ -556,6 +795,33 @@ pub fn instruction_counts(frames: &[DecodedFrame]) -> Option<InstructionCounts> 
     let overhead = f64::from(loop_ticks) * ipt / f64::from(updates);
     let per_sample = f64::from(update_ticks) * ipt / f64::from(updates) - overhead;
     let per_reversal_sample = f64::from(reversal_ticks) * ipt / f64::from(reversals) - overhead;
+    let det = frames
+        .iter()
+        .find(|f| f.message.starts_with("icount detector "));
+    let pipe = frames
+        .iter()
+        .find(|f| f.message.starts_with("icount pipeline "));
+    let per = |ticks: u32, n: u32| f64::from(ticks) * ipt / f64::from(n);
+    let detector = det.and_then(|d| {
+        let n: u32 = d.parse("samples")?;
+        let lp: u32 = d.parse("loop_ticks")?;
+        let ramp: u32 = d.parse("ramp_ticks")?;
+        let tri: u32 = d.parse("triangle_ticks")?;
+        let revs: u32 = d.parse("reversals")?;
+        if n == 0 || revs == 0 {
+            return None;
+        }
+        Some((
+            per(ramp, n) - per(lp, n),
+            (f64::from(tri) - f64::from(ramp)) * ipt / f64::from(revs),
+        ))
+    });
+    let pipeline = pipe.and_then(|p| {
+        let n: u32 = p.parse("samples")?;
+        let lp: u32 = p.parse("loop_ticks")?;
+        let step: u32 = p.parse("step_ticks")?;
+        (n > 0).then(|| per(step, n) - per(lp, n))
+    });
     Some(InstructionCounts {
         calibration_instructions,
         calibration_ticks,
@@ -568,6 +834,9 @@ pub fn instruction_counts(frames: &[DecodedFrame]) -> Option<InstructionCounts> 
         reversals,
         reversal_ticks,
         reversal_errors,
+        detector_instructions_per_sample: detector.map(|d| d.0),
+        detector_instructions_per_reversal: detector.map(|d| d.1),
+        pipeline_instructions_per_sample: pipeline,
     })
 }
 

@@ -249,9 +249,10 @@ fn check_json_fields() {
     }
 }
 
+/// The former no-command summary, now `host-sim summary` (no command runs `run`: tests/run.rs).
 #[test]
-fn no_command_summarises_the_default_scene() {
-    let out = host_sim().output().unwrap();
+fn summary_command_summarises_the_default_scene() {
+    let out = host_sim().arg("summary").output().unwrap();
     assert!(
         out.status.success(),
         "{}",
