@@ -72,11 +72,15 @@ pub struct DetectorConfig {
     pub fit_half: usize,
     /// Samples within `h` of the extremum after which the base is declared stuck.
     pub stick_samples: usize,
+    /// Breakaway shape: with static = kinetic friction the slip starts with zero acceleration
+    /// (x ∝ u³ or u⁴: the best of u², u³, u⁴ is fitted); with static > kinetic it starts with a
+    /// finite one (x ∝ u²).
+    pub cubic_breakaway: bool,
 }
 
 impl DetectorConfig {
     /// Defaults for a displacement noise RMS and sample rate: h = 8σ (at least 1 µm), fits over
-    /// 2 ms, stick after 20 ms.
+    /// 2 ms, stick after the slip has stalled within h for 10 ms.
     pub fn for_noise(noise_rms_m: f64, sample_rate_hz: f64) -> Result<Self, Error> {
         check(
             Param::SampleRate,
@@ -86,12 +90,21 @@ impl DetectorConfig {
         )?;
         check(Param::EventTime, noise_rms_m, noise_rms_m >= 0.0, ">= 0 m")?;
         let fit = libm::round(2e-3 * sample_rate_hz).clamp(2.0, 64.0) as usize;
-        let stick = libm::round(20e-3 * sample_rate_hz).clamp(3.0, 1e6) as usize;
+        let stick = libm::round(10e-3 * sample_rate_hz).clamp(3.0, 1e6) as usize;
         Ok(Self {
             hysteresis_m: (8.0 * noise_rms_m).max(1e-6) as f32,
             fit_half: fit,
             stick_samples: stick,
+            cubic_breakaway: true,
         })
+    }
+}
+
+impl DetectorConfig {
+    /// The breakaway shape for static and kinetic friction coefficients (cubic when μs = μ).
+    pub fn with_friction(mut self, mu_static: f64, mu_kinetic: f64) -> Self {
+        self.cubic_breakaway = mu_static <= mu_kinetic;
+        self
     }
 }
 
@@ -108,6 +121,13 @@ pub struct ReversalDetector<const N: usize> {
     ext: f32,
     /// Sample index of the extremum, or of the stick.
     ext_k: u64,
+    /// Stall detection while sliding: reference value and the sample it was set.
+    stall_ref: f32,
+    stall_k: u64,
+    /// Measured slip acceleration (base − table, m/s²), when provided.
+    accel: [f32; N],
+    /// Whether every sample so far came with a slip acceleration.
+    has_accel: bool,
 }
 
 impl<const N: usize> ReversalDetector<N> {
@@ -133,6 +153,10 @@ impl<const N: usize> ReversalDetector<N> {
             direction: 0,
             ext: 0.0,
             ext_k: 0,
+            stall_ref: 0.0,
+            stall_k: 0,
+            accel: [0.0; N],
+            has_accel: true,
         })
     }
 
@@ -150,9 +174,30 @@ impl<const N: usize> ReversalDetector<N> {
         self.ring[(i % N as u64) as usize]
     }
 
+    /// Process one displacement sample (m) and the measured slip acceleration, base minus table
+    /// accelerometer (m/s²). With the acceleration, event times come from the slip velocity's zero
+    /// (see [`Self::process`]): much sharper for slow breakaways and sticks.
+    pub fn process_with_accel(&mut self, x: f32, slip_accel: f32) -> Option<SlipEvent> {
+        let k = self.k;
+        let a = if slip_accel.is_finite() {
+            slip_accel
+        } else if k > 0 {
+            self.accel[((k - 1) % N as u64) as usize]
+        } else {
+            0.0
+        };
+        self.accel[(k % N as u64) as usize] = a;
+        self.step(x)
+    }
+
     /// Process one displacement sample (m). A non-finite sample is skipped (the detector keeps
     /// time; its slot repeats the previous value).
     pub fn process(&mut self, x: f32) -> Option<SlipEvent> {
+        self.has_accel = false;
+        self.step(x)
+    }
+
+    fn step(&mut self, x: f32) -> Option<SlipEvent> {
         let k = self.k;
         let x = if x.is_finite() {
             x
@@ -174,10 +219,41 @@ impl<const N: usize> ReversalDetector<N> {
             let dev = x - self.ext;
             if libm::fabsf(dev) > h {
                 let direction = if dev > 0.0 { 1 } else { -1 };
-                let t0 = self.slip_start_time(k);
+                // Search the kink around the last sample still within h/4 of the stuck value (a
+                // slow, cubic breakaway takes many samples to leave the hysteresis band).
+                let l = self.cfg.fit_half as u64;
+                let oldest = k.saturating_sub(N as u64 - 1);
+                let mut i0 = k;
+                while i0 > oldest && libm::fabsf(self.at(i0) - self.ext) > 0.25 * h {
+                    i0 -= 1;
+                }
+                let lo = i0.saturating_sub(2 * l).max(oldest);
+                let (a, b) = (i0.saturating_sub(l).max(lo) as f32, (i0 + l).min(k) as f32);
+                // The breakaway's shape depends on how the friction demand crosses the limit:
+                // u² (μs > μ: a finite jump), u³ (a linear crossing), u⁴ (a tangent one).
+                let powers: &[i32] = if self.cfg.cubic_breakaway {
+                    &[2, 3, 4]
+                } else {
+                    &[2]
+                };
+                let mut t0 = k as f32;
+                let mut best = f32::INFINITY;
+                if self.has_accel {
+                    t0 = self.zero_velocity_fit(lo, k, (a, b)).0;
+                } else {
+                    for &pw in powers {
+                        let (t, r) = self.kink_fit(lo, k, (a, b), false, pw);
+                        if r < best {
+                            best = r;
+                            t0 = t;
+                        }
+                    }
+                }
                 self.direction = direction;
                 self.ext = x;
                 self.ext_k = k;
+                self.stall_ref = x;
+                self.stall_k = k;
                 return Some(SlipEvent::SlipStart {
                     direction,
                     age_samples: (k as f32 - t0).max(0.0),
@@ -185,27 +261,33 @@ impl<const N: usize> ReversalDetector<N> {
             }
             return None;
         }
+        // Stall: the slip has stayed within h of one value (noise cannot renew this reference the
+        // way it renews the running extremum).
+        if libm::fabsf(x - self.stall_ref) > h {
+            self.stall_ref = x;
+            self.stall_k = k;
+        }
         if d * (x - self.ext) > 0.0 {
             self.ext = x;
             self.ext_k = k;
-            return None;
-        }
-        if d * (self.ext - x) > h {
+        } else if d * (self.ext - x) > h {
             let te = self.vertex_time(k);
             let direction = -self.direction;
             self.direction = direction;
             self.ext = x;
             self.ext_k = k;
+            self.stall_ref = x;
+            self.stall_k = k;
             return Some(SlipEvent::Reversal {
                 direction,
                 age_samples: (k as f32 - te).max(0.0),
             });
         }
-        if k - self.ext_k >= self.cfg.stick_samples as u64 {
-            let te = self.vertex_time(k);
+        if k - self.stall_k >= self.cfg.stick_samples as u64 {
+            let te = self.stick_time(k);
             self.direction = 0;
-            // Stuck value: mean of the samples since the extremum (within the ring).
-            let n = (k - self.ext_k).min(N as u64 - 1);
+            // Stuck value: mean of the samples of the stall (within the ring).
+            let n = (k - self.stall_k).clamp(1, N as u64 - 1);
             let mut sum = 0.0f32;
             for i in (k - n + 1)..=k {
                 sum += self.at(i);
@@ -225,6 +307,11 @@ impl<const N: usize> ReversalDetector<N> {
         let e = self.ext_k;
         let l = self.cfg.fit_half as u64;
         let oldest = k.saturating_sub(N as u64 - 1);
+        if self.has_accel {
+            let lo = e.saturating_sub(2 * l).max(oldest);
+            let (a, b) = (e.saturating_sub(l).max(lo) as f32, (e + l).min(k) as f32);
+            return self.zero_velocity_fit(lo, k, (a, b)).0;
+        }
         let lo = e.saturating_sub(l).max(oldest);
         let hi = (e + l).min(k);
         let left = fit_vertex(|i| self.at(i), lo, e + 1.min(k - e));
@@ -238,35 +325,196 @@ impl<const N: usize> ReversalDetector<N> {
         }
     }
 
-    /// Slip start time (absolute sample units) from √|x − x_s| ∝ (t − t_s) over the recent samples.
-    fn slip_start_time(&self, k: u64) -> f32 {
-        let l = (2 * self.cfg.fit_half as u64).min(N as u64 - 1).min(k);
-        let floor = 0.25 * self.cfg.hysteresis_m;
-        let (mut n, mut st, mut sy, mut stt, mut sty) = (0.0f32, 0.0f32, 0.0f32, 0.0f32, 0.0f32);
-        for i in (k - l)..=k {
-            let dev = libm::fabsf(self.at(i) - self.ext);
-            if dev > floor {
-                let t = (i as i64 - k as i64) as f32;
-                let y = libm::sqrtf(dev);
-                n += 1.0;
-                st += t;
-                sy += y;
-                stt += t * t;
-                sty += t * y;
-            }
+    /// Stick time (absolute sample units): the slip x = x_s − c·(t_s − t)² before t_s and x_s after
+    /// (constant deceleration to rest), fitted around the start of the stall.
+    fn stick_time(&self, k: u64) -> f32 {
+        let l = self.cfg.fit_half as u64;
+        let lo = self.stall_k.saturating_sub(2 * l);
+        let (a, b) = (self.stall_k.saturating_sub(l), (self.stall_k + l).min(k));
+        if self.has_accel {
+            return self.zero_velocity_fit(lo, k, (a as f32, b as f32)).0;
         }
-        let den = n * stt - st * st;
-        if n >= 3.0 && den > 0.0 {
-            let slope = (n * sty - st * sy) / den;
-            let icpt = (sy - slope * st) / n;
-            if slope > 0.0 {
-                let t0 = -icpt / slope;
-                if t0 <= 0.0 && t0 >= -(l as f32) - 2.0 {
-                    return k as f32 + t0;
+        self.kink_fit(lo, k, (a as f32, b as f32), true, 2).0
+    }
+
+    /// The time t_e at which the slip velocity is zero (a reversal, a stick or a breakaway), from
+    /// the displacement and the measured slip acceleration a over samples lo..=hi: since
+    /// v(t_e) = 0, x(t) = x_e + c·∫_{t_e}^{t} (t − σ) a(σ) dσ on both sides (a ≈ 0 while stuck),
+    /// fitted by least squares for (x_e, c) (c ≈ Δt² absorbs the units and any accelerometer gain
+    /// error); t_e on a one-sample grid over [a, b], refined by golden-section search.
+    fn zero_velocity_fit(&self, lo: u64, hi: u64, (a, b): (f32, f32)) -> (f32, f32) {
+        let lo = lo.max(hi.saturating_sub(N as u64 - 1));
+        let n = (hi - lo) as usize;
+        // Prefix integrals (trapezoid, a linear between samples, σ in samples from lo):
+        // s0[i] = ∫_lo^i a, s1[i] = ∫_lo^i σ a.
+        let acc = |i: u64| self.accel[(i % N as u64) as usize];
+        let at_window = |i: usize| acc(lo + i as u64);
+        let mut s0 = [0.0f32; N];
+        let mut s1 = [0.0f32; N];
+        for j in 0..n.min(N - 1) {
+            let (aj, an) = (at_window(j), at_window(j + 1));
+            s0[j + 1] = s0[j] + 0.5 * (aj + an);
+            s1[j + 1] = s1[j] + j as f32 * 0.5 * (aj + an) + aj / 6.0 + an / 3.0;
+        }
+        // ∫ and ∫σ· of the linear a(σ) = α + β(σ − σ0) over [p, q].
+        let lin = |alpha: f32, beta: f32, s0_: f32, p: f32, q: f32| {
+            let i0 = alpha * (q - p) + beta * ((q - s0_) * (q - s0_) - (p - s0_) * (p - s0_)) / 2.0;
+            let i1 = alpha * (q * q - p * p) / 2.0
+                + beta * ((q * q * q - p * p * p) / 3.0 - s0_ * (q * q - p * p) / 2.0);
+            (i0, i1)
+        };
+        let last = n.min(N - 1);
+        let x0 = self.at(hi);
+        let lo_f = lo as f32;
+        let resid = |te: f32| {
+            // The acceleration jumps at t_e (inside sample interval j): extrapolate each side's
+            // samples linearly up to t_e instead of interpolating across the jump.
+            let u = te - lo_f;
+            let j = (libm::floorf(u).max(0.0) as usize).min(last.saturating_sub(1));
+            let f = u - j as f32;
+            let (jf, te_w) = (j as f32, j as f32 + f);
+            let aj = at_window(j);
+            let left_slope = if j > 0 { aj - at_window(j - 1) } else { 0.0 };
+            let an = at_window(j + 1);
+            let right_slope = if j + 2 <= last {
+                at_window(j + 2) - an
+            } else {
+                0.0
+            };
+            let (l0, l1) = lin(aj, left_slope, jf, jf, te_w);
+            let (r0, r1) = lin(an, right_slope, jf + 1.0, te_w, jf + 1.0);
+            // Prefix integrals of the modified acceleration at t_e and at the samples.
+            let (e0, e1) = (s0[j] + l0, s1[j] + l1);
+            let trap = (s0[j + 1] - s0[j], s1[j + 1] - s1[j]);
+            let p = |i: usize| {
+                if i <= j {
+                    (s0[i], s1[i])
+                } else {
+                    (s0[i] - trap.0 + l0 + r0, s1[i] - trap.1 + l1 + r1)
                 }
+            };
+            let g = |i: usize| {
+                // ∫_{t_e}^{t_i} (t_i − σ) a dσ = t_i (P0(t_i) − P0(t_e)) − (P1(t_i) − P1(t_e)).
+                let (p0, p1) = p(i);
+                i as f32 * (p0 - e0) - (p1 - e1)
+            };
+            let (mut m, mut sg, mut sgg, mut sy, mut sgy) = (0.0f32, 0.0, 0.0, 0.0, 0.0);
+            for i in 0..=n.min(N - 1) {
+                let gi = g(i);
+                let y = self.at(lo + i as u64) - x0;
+                m += 1.0;
+                sg += gi;
+                sgg += gi * gi;
+                sy += y;
+                sgy += gi * y;
+            }
+            let det = m * sgg - sg * sg;
+            if det == 0.0 || det.is_nan() {
+                return f32::INFINITY;
+            }
+            let c = (m * sgy - sg * sy) / det;
+            let xe = (sy - c * sg) / m;
+            let mut r = 0.0f32;
+            for i in 0..=n.min(N - 1) {
+                let e = self.at(lo + i as u64) - x0 - xe - c * g(i);
+                r += e * e;
+            }
+            r
+        };
+        let (a, b) = (a.max(lo_f), b.min(hi as f32));
+        let (mut best, mut best_r) = (a, f32::INFINITY);
+        let mut t = a;
+        while t <= b {
+            let r = resid(t);
+            if r < best_r {
+                best_r = r;
+                best = t;
+            }
+            t += 1.0;
+        }
+        let (mut lo_t, mut hi_t) = ((best - 1.0).max(lo_f), (best + 1.0).min(hi as f32));
+        let gr = 0.618_034f32;
+        for _ in 0..14 {
+            let (m1, m2) = (hi_t - gr * (hi_t - lo_t), lo_t + gr * (hi_t - lo_t));
+            if resid(m1) < resid(m2) {
+                hi_t = m2;
+            } else {
+                lo_t = m1;
             }
         }
-        k as f32
+        let te = 0.5 * (lo_t + hi_t);
+        (te, resid(te))
+    }
+
+    /// Fit of a power law joined to a constant at t_s, x = x_s + c·u^power with u the time past
+    /// the kink (`before`: before t_s, a stick; else after it, a slip start), by least squares
+    /// over samples lo..=hi (within the ring). t_s is searched on a one-sample grid over [a, b],
+    /// then refined by golden-section search. Returns (t_s, residual).
+    fn kink_fit(
+        &self,
+        lo: u64,
+        hi: u64,
+        (a, b): (f32, f32),
+        before: bool,
+        power: i32,
+    ) -> (f32, f32) {
+        let lo = lo.max(hi.saturating_sub(N as u64 - 1));
+        let x0 = self.at(hi);
+        let reg = |ts: f32, i: u64| {
+            let u = if before { ts - i as f32 } else { i as f32 - ts };
+            if u > 0.0 {
+                libm::powf(u, power as f32)
+            } else {
+                0.0
+            }
+        };
+        let resid = |ts: f32| {
+            // Linear least squares for (x_s, c) with regressors 1 and u^power.
+            let (mut n, mut sg, mut sgg, mut sy, mut sgy) = (0.0f32, 0.0, 0.0, 0.0, 0.0);
+            for i in lo..=hi {
+                let g = reg(ts, i);
+                let y = self.at(i) - x0;
+                n += 1.0;
+                sg += g;
+                sgg += g * g;
+                sy += y;
+                sgy += g * y;
+            }
+            let det = n * sgg - sg * sg;
+            if det == 0.0 || det.is_nan() {
+                return f32::INFINITY;
+            }
+            let c = (n * sgy - sg * sy) / det;
+            let xs = (sy - c * sg) / n;
+            let mut r = 0.0f32;
+            for i in lo..=hi {
+                let e = self.at(i) - x0 - xs - c * reg(ts, i);
+                r += e * e;
+            }
+            r
+        };
+        let (mut best, mut best_r) = (a, f32::INFINITY);
+        let mut t = a;
+        while t <= b {
+            let r = resid(t);
+            if r < best_r {
+                best_r = r;
+                best = t;
+            }
+            t += 1.0;
+        }
+        let (mut lo_t, mut hi_t) = (best - 1.0, best + 1.0);
+        let gr = 0.618_034f32;
+        for _ in 0..12 {
+            let (m1, m2) = (hi_t - gr * (hi_t - lo_t), lo_t + gr * (hi_t - lo_t));
+            if resid(m1) < resid(m2) {
+                hi_t = m2;
+            } else {
+                lo_t = m1;
+            }
+        }
+        let ts = 0.5 * (lo_t + hi_t);
+        (ts, resid(ts))
     }
 }
 
@@ -316,6 +564,78 @@ fn fit_vertex(at: impl Fn(u64) -> f32, lo: u64, hi: u64) -> Option<(f32, u64)> {
 mod tests {
     use super::*;
 
+    #[test]
+    fn locates_events_with_the_slip_acceleration() {
+        let cfg = DetectorConfig {
+            hysteresis_m: 2e-6,
+            fit_half: 20,
+            stick_samples: 100,
+            cubic_breakaway: true,
+        };
+        let dt = 1e-4f64;
+        // Piecewise constant jerk: breakaway at t0 with a ramping acceleration (x ∝ u³), constant
+        // deceleration to a reversal at te (the acceleration jumps), then a deceleration to a stick.
+        let t0 = 0.0051234f64;
+        let j = 400.0;
+        let t1 = t0 + 0.008;
+        let v1 = 0.5 * j * (t1 - t0).powi(2);
+        let te = t1 + v1 / 3.0;
+        let tm = te + 0.01;
+        let vm: f64 = -2.0 * 0.01;
+        let ts = tm + vm.abs() / 4.0;
+        // (start, acceleration at start, jerk)
+        let segs = [
+            (t0, 0.0, j),
+            (t1, -3.0, 0.0),
+            (te, -2.0, 0.0),
+            (tm, 4.0, 0.0),
+            (ts, 0.0, 0.0),
+        ];
+        let slip = |t: f64| -> (f64, f64) {
+            let (mut x, mut v) = (0.0f64, 0.0f64);
+            if t < t0 {
+                return (0.0, 0.0);
+            }
+            for (i, &(start, a0, jk)) in segs.iter().enumerate() {
+                let end = segs.get(i + 1).map_or(f64::INFINITY, |s| s.0);
+                let u = (t.min(end) - start).max(0.0);
+                let a = if i == segs.len() - 1 {
+                    0.0
+                } else {
+                    a0 + jk * u
+                };
+                if t < end || i == segs.len() - 1 {
+                    let (xa, va) = if i == segs.len() - 1 {
+                        (x, 0.0)
+                    } else {
+                        (
+                            x + v * u + 0.5 * a0 * u * u + jk * u.powi(3) / 6.0,
+                            v + a0 * u + 0.5 * jk * u * u,
+                        )
+                    };
+                    let _ = va;
+                    return (xa, a);
+                }
+                x += v * u + 0.5 * a0 * u * u + jk * u.powi(3) / 6.0;
+                v += a0 * u + 0.5 * jk * u * u;
+            }
+            (x, 0.0)
+        };
+        let mut det = ReversalDetector::<256>::new(cfg).unwrap();
+        let mut found = std::vec::Vec::new();
+        for k in 0..900u64 {
+            let (x, a) = slip(k as f64 * dt);
+            if let Some(e) = det.process_with_accel(x as f32, a as f32) {
+                found.push((k as f64 - e.age_samples() as f64) * dt);
+            }
+        }
+        std::println!("{found:?} vs {:?}", [t0, te, ts]);
+        assert_eq!(found.len(), 3, "{found:?}");
+        for (got, want) in found.iter().zip([t0, te, ts]) {
+            assert!((got - want).abs() < 0.1 * dt, "{got} vs {want}");
+        }
+    }
+
     /// A piecewise-parabolic slip with a reversal at a sub-sample time and different curvatures.
     #[test]
     fn locates_a_sub_sample_reversal_without_noise() {
@@ -323,6 +643,7 @@ mod tests {
             hysteresis_m: 2e-6,
             fit_half: 20,
             stick_samples: 10_000,
+            cubic_breakaway: true,
         };
         let mut det = ReversalDetector::<64>::new(cfg).unwrap();
         let dt = 1e-4f64;

@@ -271,6 +271,17 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
         self.k
     }
 
+    /// The prediction of an earlier sample as revised by the events pushed since (the history
+    /// re-simulated from each late event): `None` outside the kept history. A sample older than the
+    /// longest detection latency is final.
+    pub fn prediction_at(&self, sample: u64) -> Option<T> {
+        if sample >= self.k || self.k - sample > H as u64 {
+            return None;
+        }
+        let z = self.z[Self::slot(sample)];
+        Some(-(z[0] + self.two_xi * z[1]))
+    }
+
     /// One piece of an interval: from fraction `fa` to `fb` in `phase`, with table accelerations
     /// `u0`, `u1` at the interval's ends; `mu` scales the friction (0: free vibration only).
     fn piece(&self, z: [T; 2], phase: Phase, (fa, fb): (T, T), (u0, u1): (T, T), mu: T) -> [T; 2] {

@@ -14,6 +14,7 @@
 
 pub mod bench;
 pub mod methods;
+pub mod model;
 pub mod plot;
 pub mod plots;
 pub mod qemu_cmd;

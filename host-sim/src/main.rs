@@ -132,9 +132,13 @@ struct RunArgs {
     /// Start of the plot window (s).
     #[arg(long, value_name = "S", default_value_t = 0.0)]
     plot_from: f64,
-    /// What a detected stick does to the estimator: keep the last friction level, or push 0.
+    /// What a detected stick does to the rectangular model: keep the last friction level, or push 0.
     #[arg(long, value_enum, default_value = "keep")]
     on_stick: StickPolicy,
+    /// The estimator model (default: the smallest that serves the scene, chosen from the
+    /// simulated run: fixed-base, rectangular or stick-slip).
+    #[arg(long, value_enum)]
+    model: Option<host_sim::model::Model>,
     /// Half-width of the window matching detected to true events (ms).
     #[arg(long, value_name = "MS", default_value_t = 1e3 * host_sim::run::DEFAULT_MATCH_TOLERANCE_S)]
     match_tolerance_ms: f64,
@@ -151,6 +155,7 @@ impl Default for RunArgs {
             plot_window: host_sim::run::DEFAULT_PLOT_WINDOW_S,
             plot_from: 0.0,
             on_stick: StickPolicy::Keep,
+            model: None,
             match_tolerance_ms: 1e3 * host_sim::run::DEFAULT_MATCH_TOLERANCE_S,
         }
     }
@@ -295,6 +300,7 @@ fn run_command(args: RunArgs) -> Result<()> {
     let mut opts = RunOptions::new(out.display().to_string());
     opts.match_tolerance_s = args.match_tolerance_ms / 1e3;
     opts.on_stick = args.on_stick;
+    opts.model = args.model;
     if args.plot.is_some() {
         opts.plot_window = Some((args.plot_from, args.plot_from + args.plot_window));
     }

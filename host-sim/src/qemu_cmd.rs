@@ -49,7 +49,8 @@ pub const GOAL_BOARD_RAM_BYTES: u64 = 8 * 1024;
 /// The detector of a scene as the firmware builds it (see `firmware/build.rs`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DetectorSetup {
-    /// `DetectorConfig::for_noise(disp_noise_rms_m, rate_hz)`.
+    /// `DetectorConfig::for_noise(disp_noise_rms_m, rate_hz)?.with_friction(μs, μ)` (the
+    /// settings of `host-sim run` too).
     pub config: DetectorConfig,
     /// Ring buffer length: the power of two ≥ 2·fit_half + 2.
     pub ring: usize,
@@ -61,7 +62,11 @@ impl DetectorSetup {
     /// The setup for a scene.
     pub fn for_scene(scene: &Scene) -> Result<Self> {
         let config = DetectorConfig::for_noise(scene.sensors.disp_noise_rms_m, scene.rate_hz)
-            .map_err(|e| anyhow!("no reversal detector for the scene: {e:?}"))?;
+            .map_err(|e| anyhow!("no reversal detector for the scene: {e:?}"))?
+            .with_friction(
+                scene.static_friction_coefficient,
+                scene.structure.params().friction_coefficient,
+            );
         Ok(Self {
             config,
             ring: (2 * config.fit_half + 2).next_power_of_two(),
@@ -69,7 +74,9 @@ impl DetectorSetup {
         })
     }
 
-    /// Check the firmware's `scene ...` message against this setup and `rate_hz`.
+    /// Check the firmware's `scene ...` and `detector ...` messages against this setup and
+    /// `rate_hz`: rate, ring length, displacement range, and the detector settings in their
+    /// `Debug` form (every field, round-trip exact numbers).
     pub fn check_firmware(&self, frames: &[qemu_runner::DecodedFrame], rate_hz: f64) -> Result<()> {
         let m = frames
             .iter()
@@ -79,26 +86,9 @@ impl DetectorSetup {
             m.field(k)
                 .ok_or_else(|| anyhow!("no `{k}` in the firmware's `{}`", m.message))
         };
-        let num = |k: &str| -> Result<f64> {
-            get(k)?
-                .parse::<f64>()
-                .with_context(|| format!("field `{k}` of `{}`", m.message))
-        };
-        let c = &self.config;
         let checks = [
-            ("rate_hz", num("rate_hz")?, rate_hz),
-            ("ring", num("ring")?, self.ring as f64),
-            ("fit_half", num("fit_half")?, c.fit_half as f64),
-            (
-                "stick_samples",
-                num("stick_samples")?,
-                c.stick_samples as f64,
-            ),
-            (
-                "hysteresis_m",
-                f64::from(get("hysteresis_m")?.parse::<f32>()?),
-                f64::from(c.hysteresis_m),
-            ),
+            ("rate_hz", get("rate_hz")?.parse::<f64>()?, rate_hz),
+            ("ring", get("ring")?.parse::<f64>()?, self.ring as f64),
             (
                 "disp_range_m",
                 f64::from(get("disp_range_m")?.parse::<f32>()?),
@@ -109,6 +99,17 @@ impl DetectorSetup {
             if fw != host {
                 bail!("the firmware was built with {name} = {fw}, the host expects {host}");
             }
+        }
+        let d = frames
+            .iter()
+            .find(|f| f.kind() == "detector")
+            .ok_or_else(|| anyhow!("the firmware reported no `detector` message"))?;
+        let want = format!("detector {:?}", self.config);
+        if d.message != want {
+            bail!(
+                "the firmware's detector differs from the host's: `{}` vs `{want}`",
+                d.message
+            );
         }
         Ok(())
     }

@@ -320,7 +320,8 @@ pub fn cargo_build(
 }
 
 /// The scene parameters the firmware compiles in, as a scene TOML in host-sim's layout (what
-/// `firmware/build.rs` reads): structure, gravity, sample rate, displacement noise and ranges.
+/// `firmware/build.rs` reads): structure, static friction, gravity, sample rate, displacement
+/// noise and ranges.
 /// Values are written with Rust's round-trip float formatting, so the image gets exactly the
 /// scene's f64 values (and checks log headers against them bit for bit). Two scenes with the
 /// same parameters give the same text, hence the same image without a rebuild.
@@ -330,7 +331,8 @@ pub fn firmware_scene_toml(scene: &Scene) -> String {
     format!(
         "# Written by host-sim (qemu_runner::firmware_scene_toml): the firmware parameters of a scene.\n\
          gravity_m_s2 = {g:?}\n\n[structure]\nm1_kg = {m1:?}\nm2_kg = {m2:?}\n\
-         natural_frequency_hz = {f:?}\ndamping_ratio = {xi:?}\nfriction_coefficient = {mu:?}\n\n\
+         natural_frequency_hz = {f:?}\ndamping_ratio = {xi:?}\nfriction_coefficient = {mu:?}\n\
+         static_friction_coefficient = {mu_s:?}\n\n\
          [sampling]\nrate_hz = {rate:?}\n\n[sensors]\naccel_range_m_s2 = {ar:?}\n\
          disp_range_m = {dr:?}\ndisp_noise_rms_m = {dn:?}\n",
         g = p.gravity_m_s2,
@@ -339,6 +341,7 @@ pub fn firmware_scene_toml(scene: &Scene) -> String {
         f = p.natural_frequency_hz,
         xi = p.damping_ratio,
         mu = p.friction_coefficient,
+        mu_s = scene.static_friction_coefficient,
         rate = scene.rate_hz,
         ar = s.accel_range_m_s2,
         dr = s.disp_range_m,

@@ -32,6 +32,7 @@
 //! Reversals scenes (a prescribed friction train, no table motion) have no physical truth to
 //! simulate and are rejected with an error.
 
+use crate::model::{self, Model, ModelEstimator};
 use crate::scene::{Input, Scene};
 use crate::sensors::SensorModel;
 use crate::truth::{simulate, EventKind, Phase, TruthInput};
@@ -107,6 +108,8 @@ pub struct RunOptions {
     pub match_tolerance_s: f64,
     /// Keep the series of this time window `[from_s, to_s]` for a plot.
     pub plot_window: Option<(f64, f64)>,
+    /// The estimator model; `None` chooses it from the simulated run ([`model::choose`]).
+    pub model: Option<Model>,
 }
 
 impl RunOptions {
@@ -117,6 +120,7 @@ impl RunOptions {
             on_stick: StickPolicy::Keep,
             match_tolerance_s: DEFAULT_MATCH_TOLERANCE_S,
             plot_window: None,
+            model: None,
         }
     }
 }
@@ -166,7 +170,30 @@ pub struct TruthStats {
 /// The estimator's figures (errors against the truth's ü1 over every sample).
 #[derive(Debug, Clone, Serialize)]
 pub struct EstimatorStats {
-    /// "f32" (the firmware's `Estimator32`).
+    /// The model ("fixed-base", "rectangular", "stick-slip").
+    pub model: &'static str,
+    /// Why this model (chosen from the simulated run, or "--model").
+    pub model_reason: String,
+    /// The identified friction coefficient (stick-slip model; null otherwise).
+    pub mu_estimate: Option<f64>,
+    /// Its standard deviation.
+    pub mu_std: Option<f64>,
+    /// Delay after which a prediction is revised by late events (ms; null for the rectangular model).
+    pub revision_delay_ms: Option<f64>,
+    /// max |revised prediction − truth| (m/s²): the prediction of each sample as revised once its
+    /// events are detected (stick-slip model; null otherwise).
+    pub revised_max_err_m_s2: Option<f64>,
+    /// RMS of revised prediction − truth (m/s²).
+    pub revised_rms_err_m_s2: Option<f64>,
+    /// `revised_max_err_m_s2` in % of the truth's peak |ü1|.
+    pub revised_max_err_pct_of_peak: Option<f64>,
+    /// `revised_rms_err_m_s2` in % of the truth's peak |ü1|.
+    pub revised_rms_err_pct_of_peak: Option<f64>,
+    /// The rectangular model's max |error| on the same detected events (for comparison; m/s²).
+    pub rectangular_max_err_m_s2: f64,
+    /// The rectangular model's RMS error (m/s²).
+    pub rectangular_rms_err_m_s2: f64,
+    /// "f32" (as on the firmware).
     pub precision: &'static str,
     /// What a stick does to the estimator ("keep" or "zero").
     pub on_stick: &'static str,
@@ -508,12 +535,21 @@ pub fn run<W: Write>(
     let truth =
         simulate(&input).map_err(|e| anyhow!("{label}: the truth simulation failed: {e}"))?;
     let cfg = DetectorConfig::for_noise(scene.sensors.disp_noise_rms_m, rate)
-        .map_err(|e| anyhow!("{label}: detector configuration: {e}"))?;
+        .map_err(|e| anyhow!("{label}: detector configuration: {e}"))?
+        .with_friction(scene.static_friction_coefficient, structure.mu());
     let mut detector = ReversalDetector::<DETECTOR_RING>::new(cfg)
         .map_err(|e| anyhow!("{label}: detector: {e}"))?;
-    let mut est =
-        Estimator32::new(structure, rate).map_err(|e| anyhow!("{label}: estimator: {e}"))?;
+    let (model, model_reason) = match opts.model {
+        Some(m) => (m, "chosen with --model".to_string()),
+        None => model::choose(&truth, scene.duration_s),
+    };
+    let zero_at_stick = opts.on_stick == StickPolicy::Zero;
+    let mut est = ModelEstimator::new(model, structure, rate, zero_at_stick)
+        .map_err(|e| anyhow!("{label}: estimator: {e}"))?;
     let mut ideal = est.clone();
+    // The rectangular model on the same detected events, for comparison.
+    let mut rect =
+        Estimator32::new(structure, rate).map_err(|e| anyhow!("{label}: estimator: {e}"))?;
     let mut sensors = SensorModel::new(&scene.sensors);
     let mut sampler = truth.sampler();
     let events = truth.events();
@@ -543,13 +579,18 @@ pub fn run<W: Write>(
     writeln!(out, "{CSV_HEADER}").map_err(write_err)?;
 
     let mut pred_err = ErrStats::default();
+    let mut rect_err = ErrStats::default();
+    // Revised predictions: each sample once every event that can reach back to it is known (the
+    // detector's stick window plus its fits), compared with the truth kept for that long.
+    let revision_delay = (cfg.stick_samples + 4 * cfg.fit_half + 8) as u64;
+    let mut rev_err = ErrStats::default();
+    let mut truth_ring: std::collections::VecDeque<f64> = std::collections::VecDeque::new();
     let mut ideal_err = ErrStats::default();
     let mut meas_err = ErrStats::default();
     let mut truth_peak = 0.0f64;
     let mut detected: Vec<EventMark> = Vec::new();
     let mut next_true = 0usize;
     let mut rows = 0u64;
-    let zero_at_stick = opts.on_stick == StickPolicy::Zero;
 
     let result = (|| -> Result<()> {
         for k in 0..scene.samples {
@@ -580,20 +621,28 @@ pub fn run<W: Write>(
                     level: e.friction_level() as f64,
                     stick: matches!(e, SlipEvent::Stick { .. }),
                 };
-                if !mark.stick || zero_at_stick {
-                    est.push_reversal(e.friction_level(), age).map_err(|err| {
+                let used = est
+                    .push(e.friction_level(), mark.stick, age)
+                    .map_err(|err| {
                         anyhow!("{label}: estimator rejected the event {e:?} at t = {t} s: {err}")
                     })?;
+                if used && !mark.stick {
                     pushed = e.friction_level() as i32;
+                }
+                if !mark.stick || zero_at_stick {
+                    let level = if mark.stick { 0.0 } else { e.friction_level() };
+                    rect.push_reversal(level, age).map_err(|err| {
+                        anyhow!("{label}: estimator rejected the event {e:?} at t = {t} s: {err}")
+                    })?;
                 }
                 detected.push(mark);
             }
             // The ideal estimator: the truth's own slip starts and reversals, exact ages.
             while let Some(ev) = events.get(next_true).filter(|ev| ev.time_s <= t) {
                 let (level, stick) = level_of(ev.kind);
-                if !stick || zero_at_stick {
+                {
                     let age = ((t - ev.time_s) * rate) as f32;
-                    ideal.push_reversal(level as f32, age).map_err(|err| {
+                    ideal.push(level as f32, stick, age).map_err(|err| {
                         anyhow!(
                             "{label}: ideal estimator rejected the true event at t = {} s: {err}",
                             ev.time_s
@@ -602,11 +651,21 @@ pub fn run<W: Write>(
                 }
                 next_true += 1;
             }
-            let pred = est.update();
-            let ideal_pred = ideal.update();
+            let pred = est.update(f.table_accel_m_s2, f.top_accel_m_s2);
+            let ideal_pred = ideal.update(f.table_accel_m_s2, f.top_accel_m_s2);
+            let rect_pred = rect.update();
 
             let truth_top = s.top_accel_m_s2;
             pred_err.add(t, pred as f64, truth_top);
+            rect_err.add(t, rect_pred as f64, truth_top);
+            truth_ring.push_back(truth_top);
+            if k >= revision_delay {
+                let d = k - revision_delay;
+                let want = truth_ring.pop_front().unwrap_or(f64::NAN);
+                if let Some(r) = est.revised(d) {
+                    rev_err.add(scene.time(d), r as f64, want);
+                }
+            }
             ideal_err.add(t, ideal_pred as f64, truth_top);
             meas_err.add(t, f.top_accel_m_s2 as f64, truth_top);
             truth_peak = truth_peak.max(truth_top.abs());
@@ -657,6 +716,15 @@ pub fn run<W: Write>(
     let flushed = out.flush().map_err(write_err);
     result?;
     flushed?;
+    // The last samples: revised by everything seen.
+    let first = scene.samples.saturating_sub(truth_ring.len() as u64);
+    for (i, want) in truth_ring.iter().enumerate() {
+        let d = first + i as u64;
+        if let Some(r) = est.revised(d) {
+            rev_err.add(scene.time(d), r as f64, *want);
+        }
+    }
+    let revised = matches!(est, ModelEstimator::StickSlip { .. });
 
     // True events up to the last sample.
     let true_events: Vec<EventMark> = events
@@ -693,7 +761,19 @@ pub fn run<W: Write>(
             .count(),
         sticks: count(&true_events, true),
     };
+    let mu = est.mu_estimate();
     let estimator = EstimatorStats {
+        model: model.name(),
+        model_reason,
+        mu_estimate: mu.map(|m| m.mu),
+        mu_std: mu.map(|m| m.std),
+        revision_delay_ms: revised.then(|| 1e3 * revision_delay as f64 / rate),
+        revised_max_err_m_s2: revised.then_some(rev_err.max),
+        revised_rms_err_m_s2: revised.then(|| rev_err.rms(n)),
+        revised_max_err_pct_of_peak: revised.then(|| pct(rev_err.max)),
+        revised_rms_err_pct_of_peak: revised.then(|| pct(rev_err.rms(n))),
+        rectangular_max_err_m_s2: rect_err.max,
+        rectangular_rms_err_m_s2: rect_err.rms(n),
         precision: "f32",
         on_stick: opts.on_stick.name(),
         peak_predicted_m_s2: pred_err.peak,
@@ -850,9 +930,15 @@ pub fn summary_text(r: &RunReport) -> String {
         "  peak |ü1| at the samples: measured {:.4}, predicted {:.4}, truth {:.4} m/s²\n",
         e.peak_measured_m_s2, e.peak_predicted_m_s2, e.peak_truth_sampled_m_s2
     );
+    s += &format!("  model: {} ({})", e.model, e.model_reason);
+    if let (Some(mu), Some(sd)) = (e.mu_estimate, e.mu_std) {
+        s += &format!("; identified mu = {mu:.5} ± {sd:.5}");
+    }
+    s += "\n";
     s += &format!(
-        "  estimator (f32, detected events, on stick: {}) vs truth: max |error| {:.4} m/s² ({:.2} % of peak) at t = {:.4} s, \
+        "  estimator ({}, f32, detected events, on stick: {}) vs truth: max |error| {:.4} m/s² ({:.2} % of peak) at t = {:.4} s, \
          rms {:.4} m/s² ({:.2} %)\n",
+        e.model,
         e.on_stick,
         e.max_err_m_s2,
         e.max_err_pct_of_peak,
@@ -860,6 +946,23 @@ pub fn summary_text(r: &RunReport) -> String {
         e.rms_err_m_s2,
         e.rms_err_pct_of_peak
     );
+    if let (Some(m), Some(r), Some(mp), Some(rp), Some(d)) = (
+        e.revised_max_err_m_s2,
+        e.revised_rms_err_m_s2,
+        e.revised_max_err_pct_of_peak,
+        e.revised_rms_err_pct_of_peak,
+        e.revision_delay_ms,
+    ) {
+        s += &format!(
+            "  revised prediction ({d:.1} ms later, after late events re-simulate the history): max |error| {m:.4} m/s² ({mp:.2} %), rms {r:.4} m/s² ({rp:.2} %)\n"
+        );
+    }
+    if e.model != "rectangular" {
+        s += &format!(
+            "  rectangular model (the paper's, same events) for comparison: max |error| {:.4} m/s², rms {:.4} m/s²\n",
+            e.rectangular_max_err_m_s2, e.rectangular_rms_err_m_s2
+        );
+    }
     s += &format!(
         "  same estimator fed the true events (model error only): max |error| {:.4} m/s², rms {:.4} m/s²; \
          top accelerometer: max |error| {:.4} m/s²\n",

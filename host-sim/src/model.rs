@@ -1,0 +1,168 @@
+//! "Model only what a scene needs": the estimator model for a scene, and one interface over them.
+//!
+//! * **fixed-base**: the base never slides: the top mass is a fixed-base oscillator driven by the
+//!   measured table acceleration (the stick-slip estimator held in its stuck phase, events ignored);
+//! * **rectangular**: the base reciprocates continuously (after the start-up): the paper's
+//!   rectangular friction, the O(1) Duhamel recursion (`Estimator32`);
+//! * **stick-slip**: the base sticks and slides in turn: the stick-slip aware estimator
+//!   (`StickSlipEstimator`, f32 + `F32Poly`), with online friction identification.
+//!
+//! [`choose`] picks the smallest model that serves the scene from the pre-test simulation (the exact
+//! truth): no slip phase → fixed-base; no stick after the first fifth of the run → rectangular;
+//! otherwise stick-slip.
+
+use crate::truth::{EventKind, Truth};
+use ssvr_core::duhamel_recursion::Estimator32;
+use ssvr_core::math::F32Poly;
+use ssvr_core::stick_slip_estimator::{MuEstimate, StickSlipConfig, StickSlipEstimator};
+use ssvr_core::{Error, Structure};
+
+/// History of the stick-slip estimator on the host (samples): the longest back-dating.
+pub const HISTORY: usize = 2048;
+
+/// An estimator model.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Model {
+    /// Fixed-base oscillator (no sliding).
+    FixedBase,
+    /// Rectangular friction, O(1) Duhamel recursion (continuous reciprocation).
+    Rectangular,
+    /// Stick-slip aware estimator (stick and slide in turn).
+    StickSlip,
+}
+
+impl Model {
+    /// The model's name as printed and in JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            Model::FixedBase => "fixed-base",
+            Model::Rectangular => "rectangular",
+            Model::StickSlip => "stick-slip",
+        }
+    }
+}
+
+/// The smallest model that serves the simulated run, with the reason in words.
+pub fn choose(truth: &Truth, duration_s: f64) -> (Model, String) {
+    let events = truth.events();
+    let slips = events
+        .iter()
+        .filter(|e| matches!(e.kind, EventKind::SlipStart { .. }))
+        .count();
+    if slips == 0 {
+        return (
+            Model::FixedBase,
+            "the base never slides in the simulated run".into(),
+        );
+    }
+    let settle = 0.2 * duration_s;
+    let late_sticks = events
+        .iter()
+        .filter(|e| e.time_s > settle && matches!(e.kind, EventKind::Stick))
+        .count();
+    if late_sticks == 0 {
+        (
+            Model::Rectangular,
+            format!("the base slides continuously after t = {settle:.3} s"),
+        )
+    } else {
+        (
+            Model::StickSlip,
+            format!("the base sticks {late_sticks} time(s) after t = {settle:.3} s"),
+        )
+    }
+}
+
+/// One of the models, driven sample by sample.
+#[derive(Debug, Clone)]
+pub enum ModelEstimator {
+    /// Rectangular friction; `zero_at_stick` pushes level 0 at a stick (else the level is kept).
+    Rectangular {
+        /// The recursion.
+        est: Box<Estimator32>,
+        /// Push level 0 at a stick.
+        zero_at_stick: bool,
+    },
+    /// Stick-slip aware (also the fixed-base model, with `events` false).
+    StickSlip {
+        /// The estimator.
+        est: Box<StickSlipEstimator<f32, F32Poly, HISTORY>>,
+        /// Whether detected events are applied (false: fixed-base).
+        events: bool,
+    },
+}
+
+impl ModelEstimator {
+    /// The estimator of `model` for a structure and sample rate.
+    pub fn new(
+        model: Model,
+        structure: &Structure,
+        rate_hz: f64,
+        zero_at_stick: bool,
+    ) -> Result<Self, Error> {
+        Ok(match model {
+            Model::Rectangular => ModelEstimator::Rectangular {
+                est: Box::new(Estimator32::new(structure, rate_hz)?),
+                zero_at_stick,
+            },
+            Model::StickSlip | Model::FixedBase => {
+                let cfg = StickSlipConfig {
+                    use_identified_mu: true,
+                    ..StickSlipConfig::default()
+                };
+                ModelEstimator::StickSlip {
+                    est: Box::new(StickSlipEstimator::new(structure, rate_hz, cfg)?),
+                    events: model == Model::StickSlip,
+                }
+            }
+        })
+    }
+
+    /// A detected event: `level` is the friction level after it (±1 for a slip start or reversal,
+    /// 0 for a stick), `age` its age in samples. Returns whether the model used it.
+    pub fn push(&mut self, level: f32, stick: bool, age: f32) -> Result<bool, Error> {
+        match self {
+            ModelEstimator::Rectangular { est, zero_at_stick } => {
+                if stick && !*zero_at_stick {
+                    return Ok(false);
+                }
+                est.push_reversal(if stick { 0.0 } else { level }, age)?;
+                Ok(true)
+            }
+            ModelEstimator::StickSlip { est, events } => {
+                if !*events {
+                    return Ok(false);
+                }
+                let phase = if stick { 0 } else { level as i8 };
+                est.push_event(phase, age)?;
+                Ok(true)
+            }
+        }
+    }
+
+    /// The prediction of ü1 at this sample from the measured table and top accelerations.
+    pub fn update(&mut self, table_accel: f32, measured_top: f32) -> f32 {
+        match self {
+            ModelEstimator::Rectangular { est, .. } => est.update(),
+            ModelEstimator::StickSlip { est, .. } => est.update(table_accel, measured_top),
+        }
+    }
+
+    /// The prediction of an earlier sample revised by later (back-dated) events: the stick-slip
+    /// model re-simulates its history; the rectangular one cannot revise (`None`).
+    pub fn revised(&self, sample: u64) -> Option<f32> {
+        match self {
+            ModelEstimator::Rectangular { .. } => None,
+            ModelEstimator::StickSlip { est, .. } => est.prediction_at(sample),
+        }
+    }
+
+    /// The identified friction coefficient (stick-slip model).
+    pub fn mu_estimate(&self) -> Option<MuEstimate> {
+        match self {
+            ModelEstimator::Rectangular { .. } => None,
+            ModelEstimator::StickSlip { est, .. } => est.mu_estimate(),
+        }
+    }
+}
