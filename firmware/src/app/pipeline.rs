@@ -1,18 +1,43 @@
-//! The per-sample pipeline shared by both images: validate a sample, feed reversals to the
-//! estimator, predict, and queue a frame for the streaming loop.
+//! The per-sample pipeline shared by both images: validate a sample, run the reversal detector on
+//! its displacement, feed the detected events to the estimator, predict, and queue a frame for
+//! the streaming loop.
 //!
 //! The sample side (TIM2 interrupt on the board, the log-replay loop under QEMU) owns a
 //! [`Pipeline`] and the [`Producer`] of a heapless SPSC queue; the streaming side owns the
 //! [`Consumer`] and turns each [`FrameOut`] into one defmt `sample` message ([`emit`]).
+//!
+//! Per sample, in this order (host-sim's `qemu_cmd::HostPipeline` mirrors it step by step):
+//!
+//! 1. flags: `NOT_FINITE` if a channel is NaN/inf; the displacement is unusable (`DISP_INVALID`)
+//!    if the sample is missing, the displacement is not finite, flagged saturated upstream, or at
+//!    or beyond the compiled-in full scale `scene::DISP_RANGE_M`;
+//! 2. the detector (`ssvr_core::reversal_detector`) processes the displacement, or NaN when it is
+//!    unusable (the detector then repeats its last value and keeps time);
+//! 3. a slip start or reversal is pushed to the estimator as
+//!    `push_reversal(event.friction_level(), event.age_samples())`; a stick is reported but not
+//!    pushed (the rectangular model keeps its level);
+//! 4. `update()` gives the prediction of this sample (always, valid sample or not).
 
+use super::scene::{self, Detector};
 use heapless::spsc::{Consumer, Producer};
 use ssvr_core::duhamel_recursion::Estimator32;
+use ssvr_core::reversal_detector::SlipEvent;
 
 /// Number of measured channels: table accel, base accel, top accel (m/s²), base-to-table
 /// displacement (m).
 pub const CHANNELS: usize = 4;
 
+/// Index of the displacement channel.
+pub const DISP: usize = 3;
+
+/// Capacity of the sample -> streaming queue (a heapless queue of N holds N - 1 frames). The
+/// board streams from its main loop as soon as a frame is queued, so 31 frames (3.1 ms at
+/// 10 kHz) of slack is plenty there and keeps its static RAM under 8 KiB with room for the
+/// detector's ring at high rates; the QEMU replay drains every 16 samples.
+#[cfg(feature = "board")]
+pub const QUEUE_LEN: usize = 32;
 /// Capacity of the sample -> streaming queue (a heapless queue of N holds N - 1 frames).
+#[cfg(not(feature = "board"))]
 pub const QUEUE_LEN: usize = 64;
 
 /// Bits of [`FrameOut::flags`] (the `flags` field of every `sample` message).
@@ -25,17 +50,66 @@ pub mod flags {
     pub const MISSING: u8 = 1 << 2;
     /// Frames were lost before this one because the streaming queue was full.
     pub const OVERRUN: u8 = 1 << 3;
-    /// A friction reversal was pushed to the estimator at this sample.
+    /// A friction event (slip start or reversal) was pushed to the estimator at this sample.
     pub const REVERSAL: u8 = 1 << 4;
-    /// A reversal was rejected by the estimator (invalid level/age or capacity).
+    /// The estimator rejected the event (invalid level/age).
     pub const REVERSAL_REJECTED: u8 = 1 << 5;
     /// The ADC reported an error (SPI, CRC) for this sample (board image; implies `MISSING`).
     pub const ADC_ERROR: u8 = 1 << 6;
-    /// Any of the flags that make the measured channels unusable.
-    pub const INVALID: u8 = NOT_FINITE | SATURATED | MISSING | ADC_ERROR;
+    /// The displacement was unusable (missing, not finite, saturated): the detector repeated
+    /// its last value.
+    pub const DISP_INVALID: u8 = 1 << 7;
+    /// Any of the flags that make a measured channel unusable.
+    pub const INVALID: u8 = NOT_FINITE | SATURATED | MISSING | ADC_ERROR | DISP_INVALID;
 }
 
-/// A friction reversal for the estimator (see `DuhamelRecursion::push_reversal`).
+/// What a friction event in a frame is (`ev=` field of a `sample` message).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[repr(u8)]
+pub enum EventKind {
+    /// The detector saw the base start to slide (pushed).
+    SlipStart = 1,
+    /// The detector saw the sliding direction reverse (pushed).
+    Reversal = 2,
+    /// The detector saw the base stick (reported, not pushed).
+    Stick = 3,
+    /// A reversal event of the sensor log (test hook of the QEMU image; pushed).
+    Log = 4,
+}
+
+/// A friction event of a sample, as streamed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Event {
+    /// What it is.
+    pub kind: EventKind,
+    /// Friction level after it, units of μ(m1+m2)g: −1, 0 or +1.
+    pub level: i8,
+    /// Sample intervals between the event and this sample (≥ 0).
+    pub age_samples: f32,
+}
+
+impl Event {
+    /// The detector's event as streamed.
+    pub fn from_detector(e: &SlipEvent) -> Self {
+        let kind = match e {
+            SlipEvent::SlipStart { .. } => EventKind::SlipStart,
+            SlipEvent::Reversal { .. } => EventKind::Reversal,
+            SlipEvent::Stick { .. } => EventKind::Stick,
+        };
+        Self {
+            kind,
+            level: e.friction_level() as i8,
+            age_samples: e.age_samples(),
+        }
+    }
+
+    /// Whether the event goes to the estimator (everything but a stick).
+    pub fn pushes(&self) -> bool {
+        self.kind != EventKind::Stick
+    }
+}
+
+/// A friction reversal given with a sample (the sensor log's test hook).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Reversal {
     /// New friction level in units of μ(m1+m2)g: +1, −1 (or 0).
@@ -44,14 +118,26 @@ pub struct Reversal {
     pub age_samples: f32,
 }
 
+/// Where the estimator's friction events come from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EventSource {
+    /// The reversal detector on the displacement channel (the firmware's path).
+    Detector,
+    /// The reversal events carried by the samples (the QEMU image's test hook; the detector
+    /// still runs, its events are not used).
+    #[cfg_attr(not(feature = "qemu"), allow(dead_code))]
+    Samples,
+}
+
 /// One acquired sample.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sample {
     /// Table accel, base accel, top accel (m/s²), base-to-table displacement (m).
     pub channels: [f32; CHANNELS],
-    /// Acquisition flags (bits of [`flags`]: `SATURATED`, `MISSING`, `ADC_ERROR`).
+    /// Acquisition flags (bits of [`flags`]: `SATURATED`, `MISSING`, `ADC_ERROR`, and
+    /// `DISP_INVALID` when the displacement channel itself is saturated).
     pub flags: u8,
-    /// A reversal reported with this sample (from the log until the detector exists).
+    /// A reversal given with this sample (used with [`EventSource::Samples`] only).
     pub reversal: Option<Reversal>,
 }
 
@@ -67,13 +153,16 @@ impl Sample {
     }
 }
 
-/// One streamed frame: the measured channels and the prediction of the top-mass acceleration.
+/// One streamed frame: the measured channels, the friction event of this sample if any, and
+/// the prediction of the top-mass acceleration.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FrameOut {
     /// Sample index since start (the estimator's time).
     pub index: u32,
     /// Bits of [`flags`].
     pub flags: u8,
+    /// The friction event detected (or given) at this sample.
+    pub event: Option<Event>,
     /// Measured channels, as acquired (NaN when missing).
     pub channels: [f32; CHANNELS],
     /// Predicted top-mass acceleration (m/s²) at this sample.
@@ -89,15 +178,21 @@ pub struct Stats {
     pub invalid: u32,
     /// Frames dropped because the queue was full.
     pub dropped: u32,
-    /// Reversals accepted by the estimator.
+    /// Friction events (slip starts, reversals, sticks; or log reversals with the test hook).
+    pub events: u32,
+    /// Events pushed to and accepted by the estimator.
     pub reversals: u32,
-    /// Reversals rejected by the estimator.
+    /// Events rejected by the estimator.
     pub rejected: u32,
+    /// Sticks (not pushed).
+    pub sticks: u32,
 }
 
-/// The estimator and its sample clock.
+/// The detector, the estimator and the sample clock.
 pub struct Pipeline {
     estimator: Estimator32,
+    detector: Detector,
+    source: EventSource,
     index: u32,
     overrun: bool,
     /// Counters.
@@ -106,35 +201,64 @@ pub struct Pipeline {
 
 impl Pipeline {
     /// Start at sample 0.
-    pub fn new(estimator: Estimator32) -> Self {
+    pub fn new(estimator: Estimator32, detector: Detector, source: EventSource) -> Self {
         Self {
             estimator,
+            detector,
+            source,
             index: 0,
             overrun: false,
             stats: Stats::default(),
         }
     }
 
-    /// Process one sample: flag it, push its reversal, update the estimator (always, to keep
-    /// time, whether the sample is valid or not) and build its frame. Never panics.
+    /// Process one sample: flag it, run the detector, push its event, update the estimator
+    /// (always, to keep time, whether the sample is valid or not) and build its frame. Never
+    /// panics.
     pub fn step(&mut self, s: &Sample) -> FrameOut {
-        let mut f = s.flags & (flags::SATURATED | flags::MISSING | flags::ADC_ERROR);
+        let mut f =
+            s.flags & (flags::SATURATED | flags::MISSING | flags::ADC_ERROR | flags::DISP_INVALID);
         if f & flags::ADC_ERROR != 0 {
             f |= flags::MISSING;
         }
         if s.channels.iter().any(|c| !c.is_finite()) {
             f |= flags::NOT_FINITE;
         }
-        if let Some(r) = s.reversal {
-            match self.estimator.push_reversal(r.level, r.age_samples) {
-                Ok(()) => {
-                    f |= flags::REVERSAL;
-                    self.stats.reversals = self.stats.reversals.wrapping_add(1);
+        let disp = s.channels[DISP];
+        if f & flags::MISSING != 0 || !disp.is_finite() || disp.abs() >= scene::DISP_RANGE_M {
+            f |= flags::DISP_INVALID;
+        }
+        let detected = self.detector.process(if f & flags::DISP_INVALID != 0 {
+            f32::NAN
+        } else {
+            disp
+        });
+        let event = match self.source {
+            EventSource::Detector => detected.as_ref().map(Event::from_detector),
+            EventSource::Samples => s.reversal.map(|r| Event {
+                kind: EventKind::Log,
+                level: r.level as i8,
+                age_samples: r.age_samples,
+            }),
+        };
+        if let Some(e) = &event {
+            self.stats.events = self.stats.events.wrapping_add(1);
+            if e.pushes() {
+                match self
+                    .estimator
+                    .push_reversal(f32::from(e.level), e.age_samples)
+                {
+                    Ok(()) => {
+                        f |= flags::REVERSAL;
+                        self.stats.reversals = self.stats.reversals.wrapping_add(1);
+                    }
+                    Err(_) => {
+                        f |= flags::REVERSAL_REJECTED;
+                        self.stats.rejected = self.stats.rejected.wrapping_add(1);
+                    }
                 }
-                Err(_) => {
-                    f |= flags::REVERSAL_REJECTED;
-                    self.stats.rejected = self.stats.rejected.wrapping_add(1);
-                }
+            } else {
+                self.stats.sticks = self.stats.sticks.wrapping_add(1);
             }
         }
         let prediction = self.estimator.update();
@@ -144,6 +268,7 @@ impl Pipeline {
         let frame = FrameOut {
             index: self.index,
             flags: f,
+            event,
             channels: s.channels,
             prediction,
         };
@@ -170,18 +295,34 @@ impl Pipeline {
 }
 
 /// Stream one frame as a defmt message. The host decoder (host-sim `qemu_runner`) parses the
-/// `key=value` fields of messages that start with `sample `.
+/// `key=value` fields of messages that start with `sample `; a frame with a friction event has
+/// three more fields: `ev` ([`EventKind`] as u8), `level` (i8) and `age` (f32, samples).
 pub fn emit(f: &FrameOut) {
-    defmt::info!(
-        "sample idx={=u32} flags={=u8} table={=f32} base={=f32} top={=f32} disp={=f32} pred={=f32}",
-        f.index,
-        f.flags,
-        f.channels[0],
-        f.channels[1],
-        f.channels[2],
-        f.channels[3],
-        f.prediction
-    );
+    match &f.event {
+        None => defmt::info!(
+            "sample idx={=u32} flags={=u8} table={=f32} base={=f32} top={=f32} disp={=f32} pred={=f32}",
+            f.index,
+            f.flags,
+            f.channels[0],
+            f.channels[1],
+            f.channels[2],
+            f.channels[3],
+            f.prediction
+        ),
+        Some(e) => defmt::info!(
+            "sample idx={=u32} flags={=u8} table={=f32} base={=f32} top={=f32} disp={=f32} pred={=f32} ev={=u8} level={=i8} age={=f32}",
+            f.index,
+            f.flags,
+            f.channels[0],
+            f.channels[1],
+            f.channels[2],
+            f.channels[3],
+            f.prediction,
+            e.kind as u8,
+            e.level,
+            e.age_samples
+        ),
+    }
 }
 
 /// Stream every queued frame; returns how many.
@@ -197,11 +338,13 @@ pub fn drain(consumer: &mut Consumer<'_, FrameOut>) -> u32 {
 /// Report the counters of a run.
 pub fn emit_stats(s: &Stats) {
     defmt::info!(
-        "stats samples={=u32} invalid={=u32} dropped={=u32} reversals={=u32} rejected={=u32}",
+        "stats samples={=u32} invalid={=u32} dropped={=u32} events={=u32} reversals={=u32} rejected={=u32} sticks={=u32}",
         s.samples,
         s.invalid,
         s.dropped,
+        s.events,
         s.reversals,
-        s.rejected
+        s.rejected,
+        s.sticks
     );
 }

@@ -1,14 +1,20 @@
-//! The QEMU mps2-an386 image: replay a sensor log read over semihosting through the pipeline,
-//! stream defmt frames over semihosting, then measure the estimator's instruction counts and
-//! exit through semihosting with a status.
+//! The QEMU mps2-an386 image: replay a sensor log read over semihosting through the pipeline
+//! (reversal detector on the displacement + estimator), stream defmt frames over semihosting,
+//! then measure the instruction counts and exit through semihosting with a status.
+//!
+//! The structure, the sample rate and the detector settings are compiled in from the scene
+//! (`SSVR_SCENE` at build time, see [`super::scene`]); the log header is only checked against
+//! them (any difference: status [`status::SCENE_MISMATCH`]).
 //!
 //! The log path is the last word of the semihosting command line (QEMU `-append <path>`,
 //! relative to QEMU's working directory), else `SSVR_QEMU_LOG` at build time, else
 //! `sensor.ssvrlog`.
 
-use super::pipeline::{self, FrameOut, Pipeline, QUEUE_LEN};
-use super::sensor_log::{self, LogError, COUNT_UNTIL_EOF, HEADER_LEN, RECORD_LEN, REVERSAL_LEN};
-use super::{bench, stack};
+use super::pipeline::{self, EventSource, FrameOut, Pipeline, QUEUE_LEN};
+use super::sensor_log::{
+    self, options, Header, LogError, COUNT_UNTIL_EOF, HEADER_LEN, RECORD_LEN, REVERSAL_LEN,
+};
+use super::{bench, scene, stack};
 use cortex_m_semihosting::nr;
 use heapless::spsc::Queue;
 use ssvr_core::duhamel_recursion::Estimator32;
@@ -32,12 +38,15 @@ pub mod status {
     pub const LOG_OPEN: u32 = 2;
     /// The log header is invalid.
     pub const LOG_HEADER: u32 = 3;
-    /// The structure in the header is invalid or the estimator refused it.
+    /// The compiled-in structure is invalid or the estimator/detector refused it (build.rs
+    /// validates the scene, so this should not happen).
     pub const STRUCTURE: u32 = 4;
     /// The log could not be read or is truncated.
     pub const LOG_READ: u32 = 5;
     /// Core peripherals unavailable.
     pub const PERIPHERALS: u32 = 6;
+    /// The log header's sample rate or structure differs from the compiled-in scene.
+    pub const SCENE_MISMATCH: u32 = 7;
 }
 
 /// Samples replayed between two drains of the queue (the streaming loop's turn).
@@ -171,6 +180,44 @@ fn log_path(buf: &mut [u8; 256]) -> &[u8] {
     words.next_back().unwrap_or(DEFAULT_LOG.as_bytes())
 }
 
+/// The first header field that differs from the compiled-in scene: (name, log, firmware).
+/// Exact comparison: host-sim writes the scene's own f64 values.
+fn scene_mismatch(h: &Header) -> Option<(&'static str, f64, f64)> {
+    let (p, c) = (&h.params, &scene::STRUCTURE);
+    [
+        ("sample_rate_hz", h.sample_rate_hz, scene::SAMPLE_RATE_HZ),
+        ("m1_kg", p.m1_kg, c.m1_kg),
+        ("m2_kg", p.m2_kg, c.m2_kg),
+        (
+            "natural_frequency_hz",
+            p.natural_frequency_hz,
+            c.natural_frequency_hz,
+        ),
+        ("damping_ratio", p.damping_ratio, c.damping_ratio),
+        (
+            "friction_coefficient",
+            p.friction_coefficient,
+            c.friction_coefficient,
+        ),
+        ("gravity_m_s2", p.gravity_m_s2, c.gravity_m_s2),
+    ]
+    .into_iter()
+    .find(|&(_, log, fw)| log != fw)
+}
+
+/// Report the compiled-in scene and detector settings (`scene ...`, then `detector <Debug form
+/// of the DetectorConfig>`).
+fn emit_scene() {
+    defmt::info!(
+        "scene rate_hz={=f64} ring={=u32} disp_range_m={=f32} path={=str}",
+        scene::SAMPLE_RATE_HZ,
+        scene::DETECTOR_RING as u32,
+        scene::DISP_RANGE_M,
+        scene::SCENE_PATH
+    );
+    defmt::info!("detector {=str}", scene::DETECTOR_DEBUG);
+}
+
 /// Replay the log, run the benchmark, exit.
 pub fn run() -> ! {
     let Some(cp) = cortex_m::Peripherals::take() else {
@@ -179,6 +226,21 @@ pub fn run() -> ! {
     };
     let painted = stack::paint();
     let mut ticks = bench::Ticks::new(cp.SYST);
+    emit_scene();
+
+    let structure = match Structure::new(scene::STRUCTURE) {
+        Ok(s) => s,
+        Err(e) => {
+            defmt::error!("invalid compiled-in structure: {=str}", e.param().name());
+            exit(status::STRUCTURE)
+        }
+    };
+    let make_estimator = || Estimator32::new(&structure, scene::SAMPLE_RATE_HZ);
+    let (Ok(estimator), Ok(detector)) = (make_estimator(), scene::Detector::new(scene::DETECTOR))
+    else {
+        defmt::error!("the estimator or the detector rejected the compiled-in scene");
+        exit(status::STRUCTURE)
+    };
 
     let mut cmdline = [0u8; 256];
     let path = log_path(&mut cmdline);
@@ -224,9 +286,10 @@ pub fn run() -> ! {
     }
     let p = &header.params;
     defmt::info!(
-        "log rate_hz={=f64} samples={=u32} m1={=f64} m2={=f64} f_hz={=f64} xi={=f64} mu={=f64} g={=f64}",
+        "log rate_hz={=f64} samples={=u32} options={=u16} m1={=f64} m2={=f64} f_hz={=f64} xi={=f64} mu={=f64} g={=f64}",
         header.sample_rate_hz,
         header.sample_count,
+        header.options,
         p.m1_kg,
         p.m2_kg,
         p.natural_frequency_hz,
@@ -234,27 +297,22 @@ pub fn run() -> ! {
         p.friction_coefficient,
         p.gravity_m_s2
     );
-
-    let structure = match Structure::new(header.params) {
-        Ok(s) => s,
-        Err(e) => {
-            defmt::error!(
-                "invalid structure in the log header: {=str}",
-                e.param().name()
-            );
-            exit(status::STRUCTURE)
-        }
-    };
-    let make_estimator = || Estimator32::new(&structure, header.sample_rate_hz);
-    let estimator = match make_estimator() {
-        Ok(e) => e,
-        Err(e) => {
-            defmt::error!("estimator rejected the structure: {=str}", e.param().name());
-            exit(status::STRUCTURE)
-        }
+    if let Some((field, log, fw)) = scene_mismatch(&header) {
+        defmt::error!(
+            "log header does not match the compiled-in scene: {=str} log={=f64} firmware={=f64} (rebuild with SSVR_SCENE)",
+            field,
+            log,
+            fw
+        );
+        exit(status::SCENE_MISMATCH)
+    }
+    let source = if header.options & options::LOG_REVERSALS != 0 {
+        EventSource::Samples
+    } else {
+        EventSource::Detector
     };
 
-    let mut pipe = Pipeline::new(estimator);
+    let mut pipe = Pipeline::new(estimator, detector, source);
     let mut queue: Queue<FrameOut, QUEUE_LEN> = Queue::new();
     let (mut producer, mut consumer) = queue.split();
     let mut n: u32 = 0;
@@ -297,9 +355,9 @@ pub fn run() -> ! {
         exit(status::LOG_READ)
     }
 
-    match make_estimator() {
-        Ok(e) => bench::run(&mut ticks, e),
-        Err(_) => exit(status::STRUCTURE),
+    match (make_estimator(), scene::Detector::new(scene::DETECTOR)) {
+        (Ok(e), Ok(d)) => bench::run(&mut ticks, e, d),
+        _ => exit(status::STRUCTURE),
     }
     stack::report(&painted);
     defmt::info!("done");

@@ -23,8 +23,17 @@ pub mod record_flags {
     pub const SATURATED: u8 = 1 << 0;
     /// The sample was not acquired (its channels are meaningless).
     pub const MISSING: u8 = 1 << 1;
+    /// The displacement channel was at its full scale (the detector skips the sample).
+    pub const DISP_SATURATED: u8 = 1 << 2;
     /// A reversal event (i8 level, f32 age in samples) follows the flags byte.
     pub const HAS_REVERSAL: u8 = 1 << 7;
+}
+
+/// Bits of the header's `options` field (offset 14).
+pub mod options {
+    /// Test hook: the estimator takes its friction events from the records' reversal events
+    /// instead of the reversal detector (which still runs).
+    pub const LOG_REVERSALS: u16 = 1 << 0;
 }
 
 /// The log header.
@@ -36,6 +45,8 @@ pub struct Header {
     pub header_len: u16,
     /// Channels per record (must be 4).
     pub channel_count: u16,
+    /// Bits of [`options`].
+    pub options: u16,
     /// Sample rate (Hz).
     pub sample_rate_hz: f64,
     /// Structure parameters.
@@ -105,6 +116,7 @@ pub fn parse_header(b: &[u8; HEADER_LEN]) -> Result<Header, LogError> {
         version,
         header_len,
         channel_count,
+        options: u16_at(b, 14),
         sample_rate_hz,
         params: StructureParams {
             m1_kg: f64_at(b, 24),
@@ -131,6 +143,9 @@ pub fn parse_record(b: &[u8; RECORD_LEN]) -> (Sample, bool) {
     }
     if rf & record_flags::MISSING != 0 {
         fl |= flags::MISSING;
+    }
+    if rf & record_flags::DISP_SATURATED != 0 {
+        fl |= flags::SATURATED | flags::DISP_INVALID;
     }
     (
         Sample {
