@@ -12,7 +12,14 @@
 //!   buffer sized for them), all as consts.
 //! * Board image: also `OUT_DIR/scene_board.rs` with the ADC configuration and sensor scaling.
 //!
-//! Rebuilds track the scene: `rerun-if-env-changed=SSVR_SCENE` and `rerun-if-changed=<scene>`.
+//! * The estimator model, `SSVR_MODEL` = `fixed-base` | `rectangular` (default) | `stick-slip`:
+//!   the cfg `ssvr_model = "fixed_base" | "rectangular" | "stick_slip"` selects the model's code
+//!   (only that model is compiled in), and `OUT_DIR/scene.rs` gets `MODEL`, the stick-slip
+//!   estimator's settings (`STICK_SLIP`) and its history (`HISTORY`: the detector's longest
+//!   back-dating at the scene's rate + 2, [`ssvr_core::reversal_detector::DetectorConfig::max_age_samples`]).
+//!
+//! Rebuilds track the scene and the model: `rerun-if-env-changed=SSVR_SCENE`, `SSVR_MODEL` and
+//! `rerun-if-changed=<scene>`.
 
 use std::env;
 use std::fmt::Write as _;
@@ -47,6 +54,22 @@ fn main() {
         println!("cargo:rustc-link-arg-bins=-Tdefmt.x");
     }
 
+    println!("cargo:rerun-if-env-changed=SSVR_MODEL");
+    println!(
+        "cargo::rustc-check-cfg=cfg(ssvr_model, values(\"fixed_base\", \"rectangular\", \"stick_slip\"))"
+    );
+    let model = match env::var("SSVR_MODEL") {
+        Err(env::VarError::NotPresent) => "rectangular".to_string(),
+        Ok(m) if m.is_empty() => "rectangular".to_string(),
+        Ok(m) if MODELS.contains(&m.as_str()) => m,
+        Ok(m) => panic!("SSVR_MODEL = {m:?}: expected one of {MODELS:?} (default rectangular)"),
+        Err(e) => panic!("SSVR_MODEL: {e}"),
+    };
+    println!(
+        "cargo::rustc-cfg=ssvr_model=\"{}\"",
+        model.replace('-', "_")
+    );
+
     println!("cargo:rerun-if-env-changed=SSVR_SCENE");
     let path = match env::var_os("SSVR_SCENE") {
         Some(p) => {
@@ -65,13 +88,36 @@ fn main() {
             .join("table1.toml"),
     };
     println!("cargo:rerun-if-changed={}", path.display());
-    let scene = Scene::read(&path);
-    fs::write(out.join("scene.rs"), scene.common_consts()).expect("write OUT_DIR/scene.rs");
+    let scene = Scene::read(&path, &model);
+    let mut consts = scene.common_consts();
+    consts.push_str(&scene.model_consts(&model));
+    fs::write(out.join("scene.rs"), consts).expect("write OUT_DIR/scene.rs");
     if board {
         fs::write(out.join("scene_board.rs"), scene.board_consts())
             .expect("write OUT_DIR/scene_board.rs");
     }
 }
+
+/// The estimator models (`SSVR_MODEL`).
+const MODELS: [&str; 3] = ["fixed-base", "rectangular", "stick-slip"];
+
+/// The stick-slip estimator's settings in the firmware (host-sim's `model::STICK_SLIP_CONFIG`,
+/// which `host-sim qemu` checks against the firmware's `model` message): μ identified and
+/// adopted at the start of each sliding episode.
+const STICK_SLIP: ssvr_core::stick_slip_estimator::StickSlipConfig =
+    ssvr_core::stick_slip_estimator::StickSlipConfig {
+        use_identified_mu: true,
+        ..ssvr_core::stick_slip_estimator::StickSlipConfig::DEFAULT
+    };
+
+/// The fixed-base model's settings (host-sim's `model::FIXED_BASE_CONFIG`): no identification
+/// (the estimator never leaves its stuck phase, so identifying μ would change nothing but cost
+/// instructions on every sample).
+const FIXED_BASE: ssvr_core::stick_slip_estimator::StickSlipConfig =
+    ssvr_core::stick_slip_estimator::StickSlipConfig {
+        identify_mu: false,
+        ..STICK_SLIP
+    };
 
 const CHANNELS: [&str; 4] = ["table_accel", "base_accel", "top_accel", "displacement"];
 /// host-sim's defaults for a scene without a `[sensors]` table.
@@ -130,7 +176,7 @@ fn need(doc: &Value, section: &str, keys: &[&str], path: &Path) -> f64 {
 }
 
 impl Scene {
-    fn read(path: &Path) -> Self {
+    fn read(path: &Path, model: &str) -> Self {
         let text = fs::read_to_string(path)
             .unwrap_or_else(|e| panic!("cannot read scene {} (SSVR_SCENE): {e}", path.display()));
         let doc: Value = toml::from_str(&text)
@@ -212,8 +258,13 @@ impl Scene {
             })
             .with_friction(mu_static, params.friction_coefficient);
         // The detector's ring must hold 2·fit_half + 2 samples; a power of two keeps its index
-        // arithmetic (u64 modulo) a mask on the M4F.
-        let ring = (2 * detector.fit_half + 2).next_power_of_two();
+        // arithmetic (u64 modulo) a mask on the M4F. The stick-slip model follows the stick
+        // phases and needs the stick times right: a ring that holds a stick's fit window.
+        let ring = if model == "stick-slip" {
+            detector.ring_for_sticks()
+        } else {
+            detector.min_ring()
+        };
         Self {
             path: path.to_path_buf(),
             doc,
@@ -274,6 +325,71 @@ impl Scene {
             range = (self.disp_range as f32).to_bits(),
             range_f = self.disp_range as f32,
             ring = self.ring,
+        )
+    }
+
+    /// Consts of the estimator model: its name, the stick-slip settings and history.
+    fn model_consts(&self, model: &str) -> String {
+        use ssvr_core::stick_slip_estimator::{
+            history_for_age, StickSlipCoefficients, StickSlipEstimator,
+        };
+        let max_age = self.detector.max_age_samples(self.ring);
+        let history = history_for_age(max_age);
+        let structure = ssvr_core::Structure::new(self.params)
+            .unwrap_or_else(|e| panic!("scene {}: {e:?}", self.path.display()));
+        // The stick-slip estimator's coefficients, computed here with ssvr-core in f64 and rounded
+        // to f32 exactly as `StickSlipEstimator::new` does on the host: the image restores them
+        // from their bits and needs no f64 start-up code.
+        let coefficients =
+            StickSlipCoefficients::<f32>::new(&structure, self.rate).unwrap_or_else(|e| {
+                panic!(
+                    "scene {}: the stick-slip estimator rejects rate_hz = {}: {e:?}",
+                    self.path.display(),
+                    self.rate
+                )
+            });
+        if model != "rectangular" {
+            // host-sim's mirror (`qemu_cmd::HOST_HISTORY_CAPACITY`) holds up to 2048 samples.
+            type Check = StickSlipEstimator<f32, ssvr_core::math::F32Poly, 2048>;
+            assert!(
+                history <= 2048,
+                "scene {}: the stick-slip history of {history} samples (the detector's longest \
+                 back-dating at {} Hz) is too long for the firmware",
+                self.path.display(),
+                self.rate
+            );
+            if let Err(e) = Check::from_coefficients(coefficients, STICK_SLIP, history) {
+                panic!(
+                    "scene {}: the stick-slip estimator rejects the scene: {e:?}",
+                    self.path.display()
+                );
+            }
+        }
+        let mut words = String::new();
+        for w in coefficients.to_bits() {
+            let _ = write!(words, "{w:#010x}, ");
+        }
+        let n = StickSlipCoefficients::<f32>::BITS;
+        let cfg = if model == "fixed-base" {
+            FIXED_BASE
+        } else {
+            STICK_SLIP
+        };
+        let debug = format!("{cfg:?}");
+        format!(
+            "/// The estimator model (`SSVR_MODEL`).\n\
+             pub const MODEL: &str = {model:?};\n\
+             /// The stick-slip estimator's settings (stick-slip model; fixed-base: no identification).\n\
+             pub const STICK_SLIP: ssvr_core::stick_slip_estimator::StickSlipConfig =\n\
+             \x20   ssvr_core::stick_slip_estimator::{debug};\n\
+             /// `STICK_SLIP` in its `Debug` form (reported in the `model` message).\n\
+             pub const STICK_SLIP_DEBUG: &str = {debug:?};\n\
+             /// The detector's longest back-dating (samples): `DETECTOR.max_age_samples(DETECTOR_RING)`.\n\
+             pub const MAX_EVENT_AGE_SAMPLES: usize = {max_age};\n\
+             /// History of the stick-slip estimator (samples): `MAX_EVENT_AGE_SAMPLES + 2`.\n\
+             pub const HISTORY: usize = {history};\n\
+             /// The stick-slip estimator's coefficients (`StickSlipCoefficients::<f32>::to_bits`).\n\
+             pub const STICK_SLIP_COEFFICIENTS: [u32; {n}] = [{words}];\n"
         )
     }
 

@@ -84,6 +84,30 @@ impl<T: Real> Kernel<T> {
         }
     }
 
+    /// The coefficients: (regime, [a, ω_d (or ν), ω0², r1, r2], strongly overdamped), for
+    /// [`Self::from_parts`].
+    pub fn to_parts(&self) -> (Regime, [T; 5], bool) {
+        (
+            self.regime,
+            [self.a, self.omega_d, self.omega0_sq, self.r1, self.r2],
+            self.strongly_overdamped,
+        )
+    }
+
+    /// A kernel from the coefficients of [`Self::to_parts`] (e.g. computed by a build script).
+    pub const fn from_parts(regime: Regime, c: [T; 5], strongly_overdamped: bool) -> Self {
+        let [a, omega_d, omega0_sq, r1, r2] = c;
+        Self {
+            regime,
+            a,
+            omega_d,
+            omega0_sq,
+            r1,
+            r2,
+            strongly_overdamped,
+        }
+    }
+
     /// ω0² = Mp².
     pub fn omega0_sq(&self) -> T {
         self.omega0_sq

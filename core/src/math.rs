@@ -33,6 +33,10 @@ pub trait Real:
     fn abs(self) -> Self;
     /// Whether the value is finite.
     fn is_finite(self) -> bool;
+    /// The largest integer ≤ the value.
+    fn floor(self) -> Self;
+    /// Truncate to `usize`, saturating (NaN: 0).
+    fn to_usize_sat(self) -> usize;
 }
 
 impl Real for f32 {
@@ -54,6 +58,14 @@ impl Real for f32 {
     fn is_finite(self) -> bool {
         f32::is_finite(self)
     }
+    #[inline(always)]
+    fn floor(self) -> Self {
+        libm::floorf(self)
+    }
+    #[inline(always)]
+    fn to_usize_sat(self) -> usize {
+        self as usize
+    }
 }
 
 impl Real for f64 {
@@ -74,6 +86,14 @@ impl Real for f64 {
     #[inline(always)]
     fn is_finite(self) -> bool {
         f64::is_finite(self)
+    }
+    #[inline(always)]
+    fn floor(self) -> Self {
+        libm::floor(self)
+    }
+    #[inline(always)]
+    fn to_usize_sat(self) -> usize {
+        self as usize
     }
 }
 

@@ -101,6 +101,35 @@ impl DetectorConfig {
 }
 
 impl DetectorConfig {
+    /// The longest back-dating (samples) of this detector's events in the usual course, with a
+    /// ring of `ring` samples: `max(stick_samples + 2·fit_half + 2, ring)`. A stick is reported
+    /// `stick_samples` after its stall began, its time fitted at most `fit_half + 1` samples
+    /// before that; a reversal's vertex lies within the stall window, fitted within
+    /// `fit_half + 2` samples of it; a slip start lies within the ring. (A reversal whose stall
+    /// reference was renewed after the vertex can be up to `stick_samples` older: a consumer
+    /// with this much history clamps such an age.)
+    pub fn max_age_samples(&self, ring: usize) -> usize {
+        (self.stick_samples + 2 * self.fit_half + 2).max(ring)
+    }
+
+    /// The smallest power-of-two ring the detector accepts, `2·fit_half + 2` samples: enough to
+    /// locate slip starts and reversals (their fits look `2·fit_half` samples around the
+    /// extremum).
+    pub fn min_ring(&self) -> usize {
+        (2 * self.fit_half + 2).next_power_of_two()
+    }
+
+    /// The power-of-two ring that also holds a stick's fit window, `stick_samples + fit_half + 8`
+    /// samples back (at least [`Self::min_ring`]): a stick is reported `stick_samples` after its
+    /// stall began and its time is searched up to `fit_half` samples before that. With a shorter
+    /// ring the fit sees only the ring and stick times come out late by up to a few ms; the
+    /// stick-slip estimator, which follows the stick phases, needs them right.
+    pub fn ring_for_sticks(&self) -> usize {
+        (self.stick_samples + self.fit_half + 8)
+            .max(2 * self.fit_half + 2)
+            .next_power_of_two()
+    }
+
     /// The breakaway shape for static and kinetic friction coefficients (cubic when μs = μ).
     pub fn with_friction(mut self, mu_static: f64, mu_kinetic: f64) -> Self {
         self.cubic_breakaway = mu_static <= mu_kinetic;
@@ -563,6 +592,21 @@ fn fit_vertex(at: impl Fn(u64) -> f32, lo: u64, hi: u64) -> Option<(f32, u64)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn rings_and_the_longest_back_dating() {
+        // 10 kHz: fits over 20 samples, sticks after 100.
+        let c = DetectorConfig::for_noise(1e-6, 1e4).unwrap();
+        assert_eq!((c.fit_half, c.stick_samples), (20, 100));
+        assert_eq!((c.min_ring(), c.ring_for_sticks()), (64, 128));
+        assert_eq!(c.max_age_samples(64), 142);
+        assert_eq!(c.max_age_samples(128), 142);
+        // 1 kHz: fits over 2 samples, sticks after 10.
+        let c = DetectorConfig::for_noise(1e-6, 1e3).unwrap();
+        assert_eq!((c.min_ring(), c.ring_for_sticks()), (8, 32));
+        assert_eq!(c.max_age_samples(32), 32);
+        assert!(ReversalDetector::<8>::new(c).is_ok());
+    }
 
     #[test]
     fn locates_events_with_the_slip_acceleration() {

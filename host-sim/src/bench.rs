@@ -153,12 +153,24 @@ pub struct BenchScene {
     pub fourier_origin_s: Option<f64>,
 }
 
-/// Cortex-M4F instructions per sample of the firmware estimator on this scene, from the QEMU run.
-// TODO(host-sim qemu): wire the QEMU replay (`host-sim qemu`, SysTick with -icount) of the scene's
-// reversal train through the firmware image and return its instructions per sample.
+/// Cortex-M4F instructions per steady-state sample of the firmware's f32 recursion
+/// (`Estimator32::update()`, the rectangular model), measured under QEMU
+/// ([`crate::qemu_cmd::measure_instruction_counts`]: the QEMU image built for the rectangular
+/// model, SysTick with `-icount shift=0`). The count does not depend on the scene (the firmware
+/// times the recursion on its own input), so it is measured once per process and cached. `None`
+/// when QEMU is not installed or the image cannot be built or run.
 pub fn m4f_instructions_per_sample(scene: &BenchScene) -> Option<f64> {
+    static COUNT: std::sync::OnceLock<Option<f64>> = std::sync::OnceLock::new();
     let _ = scene;
-    None
+    *COUNT.get_or_init(|| {
+        if !crate::qemu_runner::qemu_available() {
+            return None;
+        }
+        crate::qemu_cmd::measure_instruction_counts(crate::model::Model::Rectangular)
+            .map(|ic| ic.instructions_per_sample)
+            .map_err(|e| eprintln!("bench: no M4F instruction count: {e:#}"))
+            .ok()
+    })
 }
 
 /// The Table 1 specimen with damping ratio `xi` (g = 9.80665).

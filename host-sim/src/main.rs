@@ -76,12 +76,18 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
-    /// Run the firmware's QEMU image (built for the scene) on the scene's simulated sensor log
-    /// and compare every prediction with the host (same f32 code) and the f64 closed form;
-    /// instruction counts and image sizes. Fails if the firmware differs from the host.
+    /// Run the firmware's QEMU image (built for the scene and the estimator model) on the
+    /// scene's simulated sensor log and compare every prediction with the host (same f32 code)
+    /// and a full-precision reference; instruction counts and image sizes. Fails if the firmware
+    /// differs from the host.
     Qemu {
         /// Scene file (TOML); default: the built-in default scene.
         scene: Option<PathBuf>,
+        /// The estimator model built into the firmware (default: the smallest that serves the
+        /// scene, chosen from the simulated run like `run`: fixed-base, rectangular or
+        /// stick-slip).
+        #[arg(long, value_enum)]
+        model: Option<host_sim::model::Model>,
         /// Print one JSON object.
         #[arg(long)]
         json: bool,
@@ -236,7 +242,9 @@ fn run(cli: Cli) -> Result<()> {
                 Ok(())
             }
         }
-        Some(Command::Qemu { scene, json }) => host_sim::qemu_cmd::command(scene.as_deref(), json),
+        Some(Command::Qemu { scene, model, json }) => {
+            host_sim::qemu_cmd::command(scene.as_deref(), json, model)
+        }
         Some(Command::Bench { quick, json, out }) => {
             let report = host_sim::bench::run(&host_sim::bench::BenchOptions {
                 quick,

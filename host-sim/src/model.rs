@@ -1,7 +1,8 @@
 //! "Model only what a scene needs": the estimator model for a scene, and one interface over them.
 //!
 //! * **fixed-base**: the base never slides: the top mass is a fixed-base oscillator driven by the
-//!   measured table acceleration (the stick-slip estimator held in its stuck phase, events ignored);
+//!   measured table acceleration (the stick-slip estimator held in its stuck phase, events ignored,
+//!   no identification: [`FIXED_BASE_CONFIG`]);
 //! * **rectangular**: the base reciprocates continuously (after the start-up): the paper's
 //!   rectangular friction, the O(1) Duhamel recursion (`Estimator32`);
 //! * **stick-slip**: the base sticks and slides in turn: the stick-slip aware estimator
@@ -9,7 +10,8 @@
 //!
 //! [`choose`] picks the smallest model that serves the scene from the pre-test simulation (the exact
 //! truth): no slip phase → fixed-base; no stick after the first fifth of the run → rectangular;
-//! otherwise stick-slip.
+//! otherwise stick-slip. The firmware compiles in one model (`SSVR_MODEL`, [`Model::name`]) with
+//! the same settings; `host-sim qemu` chooses it the same way.
 
 use crate::truth::{EventKind, Truth};
 use ssvr_core::duhamel_recursion::Estimator32;
@@ -19,6 +21,29 @@ use ssvr_core::{Error, Structure};
 
 /// History of the stick-slip estimator on the host (samples): the longest back-dating.
 pub const HISTORY: usize = 2048;
+
+/// The stick-slip estimator's settings (`run`, and the firmware's: `firmware/build.rs` builds
+/// the same, `host-sim qemu` checks the firmware's `model` message against it): μ identified and
+/// adopted at the start of each sliding episode.
+pub const STICK_SLIP_CONFIG: StickSlipConfig = StickSlipConfig {
+    use_identified_mu: true,
+    ..StickSlipConfig::DEFAULT
+};
+
+/// The fixed-base model's settings: the stick-slip estimator without identification (it never
+/// leaves its stuck phase, so identifying μ would change nothing but the cost).
+pub const FIXED_BASE_CONFIG: StickSlipConfig = StickSlipConfig {
+    identify_mu: false,
+    ..STICK_SLIP_CONFIG
+};
+
+/// The stick-slip estimator's settings of a model (rectangular: unused, the stick-slip ones).
+pub fn stick_slip_config(model: Model) -> StickSlipConfig {
+    match model {
+        Model::FixedBase => FIXED_BASE_CONFIG,
+        Model::Rectangular | Model::StickSlip => STICK_SLIP_CONFIG,
+    }
+}
 
 /// An estimator model.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
@@ -33,7 +58,10 @@ pub enum Model {
 }
 
 impl Model {
-    /// The model's name as printed and in JSON.
+    /// Every model.
+    pub const ALL: [Model; 3] = [Model::FixedBase, Model::Rectangular, Model::StickSlip];
+
+    /// The model's name as printed, in JSON and in the firmware's `SSVR_MODEL`.
     pub fn name(self) -> &'static str {
         match self {
             Model::FixedBase => "fixed-base",
@@ -106,16 +134,14 @@ impl ModelEstimator {
                 est: Box::new(Estimator32::new(structure, rate_hz)?),
                 zero_at_stick,
             },
-            Model::StickSlip | Model::FixedBase => {
-                let cfg = StickSlipConfig {
-                    use_identified_mu: true,
-                    ..StickSlipConfig::default()
-                };
-                ModelEstimator::StickSlip {
-                    est: Box::new(StickSlipEstimator::new(structure, rate_hz, cfg)?),
-                    events: model == Model::StickSlip,
-                }
-            }
+            Model::StickSlip | Model::FixedBase => ModelEstimator::StickSlip {
+                est: Box::new(StickSlipEstimator::new(
+                    structure,
+                    rate_hz,
+                    stick_slip_config(model),
+                )?),
+                events: model == Model::StickSlip,
+            },
         })
     }
 

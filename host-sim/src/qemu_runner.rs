@@ -7,10 +7,11 @@
 //! in, and the log header must match them. This module:
 //!
 //! * [`write_sensor_log`] / [`encode_sensor_log`]: write a log (format version 1);
-//! * [`firmware_scene_toml`], [`build_for_scene`]: build an image for a [`Scene`] (`cargo build
-//!   --release` in `firmware/` with `SSVR_SCENE` naming a file with the scene's firmware
-//!   parameters, the parent cargo's target/flags environment removed, serialised by a file lock)
-//!   and copy the ELF out; [`build_qemu_image`]: the same for the image's default scene;
+//! * [`firmware_scene_toml`], [`build_for_scene`], [`build_for_scene_model`]: build an image for
+//!   a [`Scene`] and an estimator model (`cargo build --release` in `firmware/` with
+//!   `SSVR_SCENE` naming a file with the scene's firmware parameters and `SSVR_MODEL` the model,
+//!   the parent cargo's target/flags environment removed, serialised by a file lock) and copy the
+//!   ELF out; [`build_qemu_image`]: the same for the image's default scene and model;
 //! * [`run_qemu`]: run the ELF under `qemu-system-arm -icount shift=0` with the log, return the
 //!   raw defmt bytes;
 //! * [`decode_frames`]: decode them with `defmt-decoder` (the firmware uses defmt 1.x, wire
@@ -21,6 +22,7 @@
 //!
 //! Plain functions, no global state; errors are [`anyhow::Error`]s with context.
 
+use crate::model::Model;
 use crate::scene::Scene;
 use anyhow::{anyhow, bail, Context, Result};
 use ssvr_core::StructureParams;
@@ -72,11 +74,11 @@ pub mod frame_flags {
 
 /// Kinds of friction events in the firmware's frames (`ev=`).
 pub mod event_kind {
-    /// The base started to slide (pushed to the estimator).
+    /// The base started to slide (pushed to the estimator, fixed-base model: not).
     pub const SLIP_START: u8 = 1;
-    /// The sliding direction reversed (pushed).
+    /// The sliding direction reversed (pushed, fixed-base model: not).
     pub const REVERSAL: u8 = 2;
-    /// The base stuck (reported, not pushed).
+    /// The base stuck (pushed by the stick-slip model only).
     pub const STICK: u8 = 3;
     /// A reversal event of the log (test hook; pushed).
     pub const LOG: u8 = 4;
@@ -232,6 +234,7 @@ fn leaks_into_nested_cargo(key: &str) -> bool {
         "CARGO_MANIFEST_PATH",
         "DEFMT_LOG",
         "SSVR_QEMU_LOG",
+        "SSVR_MODEL",
     ];
     const PREFIX: &[&str] = &[
         "CARGO_PKG_",
@@ -249,18 +252,20 @@ fn leaks_into_nested_cargo(key: &str) -> bool {
 /// `firmware_dir` (see [`cargo_build`]). Returns the ELF (in `firmware/target`: a later build
 /// for another scene overwrites it; [`build_for_scene`] copies it out).
 pub fn build_qemu_image(firmware_dir: &Path) -> Result<PathBuf> {
-    cargo_build(firmware_dir, QEMU_BIN, None, None)
+    cargo_build(firmware_dir, QEMU_BIN, None, None, None)
 }
 
 /// `cargo build --release --bin <bin> [--no-default-features --features <features>]` in
 /// `firmware_dir` (which has its own `.cargo/config.toml` selecting `thumbv7em-none-eabihf`),
 /// with a clean environment (no inherited `CARGO_TARGET_DIR`, `RUSTFLAGS`, ... from a parent
-/// cargo) and `SSVR_SCENE` set to `scene` (absolute) or removed. Returns the ELF.
+/// cargo), `SSVR_SCENE` set to `scene` (absolute) or removed and `SSVR_MODEL` set to `model`
+/// or removed (the firmware's default, rectangular). Returns the ELF.
 pub fn cargo_build(
     firmware_dir: &Path,
     bin: &str,
     features: Option<&str>,
     scene: Option<&Path>,
+    model: Option<Model>,
 ) -> Result<PathBuf> {
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
     let mut cmd = Command::new(cargo);
@@ -287,6 +292,10 @@ pub fn cargo_build(
     match scene {
         Some(p) => cmd.env("SSVR_SCENE", p),
         None => cmd.env_remove("SSVR_SCENE"),
+    };
+    match model {
+        Some(m) => cmd.env("SSVR_MODEL", m.name()),
+        None => cmd.env_remove("SSVR_MODEL"),
     };
     let out = cmd
         .output()
@@ -352,6 +361,8 @@ pub fn firmware_scene_toml(scene: &Scene) -> String {
 /// Images built for a scene by [`build_for_scene`].
 #[derive(Debug, Clone)]
 pub struct SceneImages {
+    /// The estimator model compiled in.
+    pub model: Model,
     /// The QEMU image, copied out of `firmware/target`.
     pub qemu_elf: PathBuf,
     /// The board image's ELF copy, or why it could not be built for the scene (e.g. a
@@ -363,15 +374,27 @@ pub struct SceneImages {
     pub build_s: f64,
 }
 
-/// Build the QEMU image (and, with `board`, the board image) for `scene` and copy the ELFs to
-/// `out_dir` (`ssvr-qemu.elf`, `ssvr-board.elf`). The scene's firmware parameters
+/// Build the QEMU image (and, with `board`, the board image) for `scene` with the firmware's
+/// default model (rectangular): [`build_for_scene_model`].
+pub fn build_for_scene(
+    firmware_dir: &Path,
+    scene: &Scene,
+    out_dir: &Path,
+    board: bool,
+) -> Result<SceneImages> {
+    build_for_scene_model(firmware_dir, scene, Model::Rectangular, out_dir, board)
+}
+
+/// Build the QEMU image (and, with `board`, the board image) for `scene` and the estimator
+/// `model` (`SSVR_MODEL`) and copy the ELFs to `out_dir` (`ssvr-qemu.elf`, `ssvr-board.elf`). The scene's firmware parameters
 /// ([`firmware_scene_toml`]) go to `firmware/target/host-sim/scene.toml` (rewritten only when
 /// they change, so cargo rebuilds only then) and `SSVR_SCENE` names that file. Concurrent calls
 /// (parallel tests) are serialised by an exclusive lock on `firmware/target/host-sim/build.lock`,
 /// held until the ELFs are copied.
-pub fn build_for_scene(
+pub fn build_for_scene_model(
     firmware_dir: &Path,
     scene: &Scene,
+    model: Model,
     out_dir: &Path,
     board: bool,
 ) -> Result<SceneImages> {
@@ -396,12 +419,18 @@ pub fn build_for_scene(
     let scene_file = scene_file
         .canonicalize()
         .with_context(|| format!("no scene file at {}", scene_file.display()))?;
-    let built = cargo_build(firmware_dir, QEMU_BIN, None, Some(&scene_file))?;
+    let built = cargo_build(firmware_dir, QEMU_BIN, None, Some(&scene_file), Some(model))?;
     let qemu_elf = out_dir.join(format!("{QEMU_BIN}.elf"));
     std::fs::copy(&built, &qemu_elf)
         .with_context(|| format!("cannot copy {} to {}", built.display(), qemu_elf.display()))?;
     let board_elf = if board {
-        match cargo_build(firmware_dir, BOARD_BIN, Some("board"), Some(&scene_file)) {
+        match cargo_build(
+            firmware_dir,
+            BOARD_BIN,
+            Some("board"),
+            Some(&scene_file),
+            Some(model),
+        ) {
             Ok(built) => {
                 let elf = out_dir.join(format!("{BOARD_BIN}.elf"));
                 std::fs::copy(&built, &elf)
@@ -415,6 +444,7 @@ pub fn build_for_scene(
     };
     drop(lock);
     Ok(SceneImages {
+        model,
         qemu_elf,
         board_elf,
         scene_file,
@@ -626,7 +656,8 @@ pub struct FrameEvent {
 }
 
 impl FrameEvent {
-    /// Whether the firmware pushes this event to the estimator (all but a stick).
+    /// Whether the firmware's rectangular model pushes this event to the estimator (all but a
+    /// stick; the stick-slip model pushes every event, the fixed-base model none).
     pub fn pushes(&self) -> bool {
         self.kind != event_kind::STICK
     }
@@ -744,11 +775,24 @@ pub struct InstructionCounts {
     pub calibration_ticks: u32,
     /// Executed instructions per SysTick tick (40 on mps2-an386 with `-icount shift=0`).
     pub instructions_per_tick: f64,
-    /// Instructions of one steady-state `update()`, loop overhead removed.
+    /// Instructions of one steady-state update of the model's estimator, loop overhead removed
+    /// (rectangular: `update()` while sliding; stick-slip: `update(table, top)` while sliding, μ
+    /// identified; fixed-base: `update(table, top)` stuck).
     pub instructions_per_sample: f64,
-    /// Extra instructions of a sample with a reversal (`push_reversal` + its effect on
-    /// `update()`), over a steady-state sample.
-    pub instructions_per_reversal: f64,
+    /// Extra instructions of a sample with a reversal (`push_reversal(±1, 0.5)` or
+    /// `push_event(±1, 0.5)` + its effect on the update), over a steady-state sample; `None`
+    /// for the fixed-base model (it pushes no event).
+    pub instructions_per_reversal: Option<f64>,
+    /// Stick-slip and fixed-base models: instructions of a steady-state stuck update.
+    pub instructions_per_sample_stuck: Option<f64>,
+    /// Stick-slip model: extra instructions of a sample with an event [`Self::max_event_age`]
+    /// samples old (the whole history re-simulated), over a steady-state sample.
+    pub instructions_per_event_max_age: Option<f64>,
+    /// The age of those events (samples).
+    pub max_event_age: Option<f64>,
+    /// Stick-slip model: instructions of a steady-state sliding update without the μ
+    /// identification (the prediction alone).
+    pub instructions_per_sample_without_identification: Option<f64>,
     /// Updates timed in the steady-state block.
     pub updates: u32,
     /// SysTick ticks of the steady-state block.
@@ -769,6 +813,9 @@ pub struct InstructionCounts {
     /// Instructions of the firmware's whole per-sample step (flags, detector, estimator, frame;
     /// no I/O) in the steady sliding state.
     pub pipeline_instructions_per_sample: Option<f64>,
+    /// Extra instructions of the detector for a stick and the slip start that ends it (their kink
+    /// fits), over sliding samples.
+    pub detector_instructions_per_stick: Option<f64>,
 }
 
 /// Extract the instruction counts from the `icount` messages. Computed on the host from the raw
@@ -792,12 +839,37 @@ pub fn instruction_counts(frames: &[DecodedFrame]) -> Option<InstructionCounts> 
     let reversals: u32 = raw.parse("reversals")?;
     let reversal_ticks: u32 = raw.parse("reversal_ticks")?;
     let reversal_errors: u32 = raw.parse("reversal_errors")?;
-    if updates == 0 || reversals == 0 {
+    if updates == 0 {
         return None;
     }
     let overhead = f64::from(loop_ticks) * ipt / f64::from(updates);
     let per_sample = f64::from(update_ticks) * ipt / f64::from(updates) - overhead;
-    let per_reversal_sample = f64::from(reversal_ticks) * ipt / f64::from(reversals) - overhead;
+    let per_reversal = (reversals > 0)
+        .then(|| f64::from(reversal_ticks) * ipt / f64::from(reversals) - overhead - per_sample);
+    let ss = frames
+        .iter()
+        .find(|f| f.message.starts_with("icount stick_slip "));
+    let stuck = ss.and_then(|m| {
+        let n: u32 = m.parse("stuck_updates")?;
+        let ticks: u32 = m.parse("stuck_ticks")?;
+        (n > 0).then(|| f64::from(ticks) * ipt / f64::from(n) - overhead)
+    });
+    let predict = ss.and_then(|m| {
+        let n: u32 = m.parse("predict_updates")?;
+        let ticks: u32 = m.parse("predict_ticks")?;
+        (n > 0).then(|| f64::from(ticks) * ipt / f64::from(n) - overhead)
+    });
+    let long = ss.and_then(|m| {
+        let n: u32 = m.parse("long_events")?;
+        let ticks: u32 = m.parse("long_event_ticks")?;
+        let age: f64 = m.parse("max_age")?;
+        (n > 0).then(|| {
+            (
+                f64::from(ticks) * ipt / f64::from(n) - overhead - per_sample,
+                age,
+            )
+        })
+    });
     let det = frames
         .iter()
         .find(|f| f.message.starts_with("icount detector "));
@@ -819,6 +891,15 @@ pub fn instruction_counts(frames: &[DecodedFrame]) -> Option<InstructionCounts> 
             (f64::from(tri) - f64::from(ramp)) * ipt / f64::from(revs),
         ))
     });
+    let stick = frames
+        .iter()
+        .find(|f| f.message.starts_with("icount detector_stick "))
+        .and_then(|m| {
+            let ramp: u32 = m.parse("ramp_ticks")?;
+            let stair: u32 = m.parse("stair_ticks")?;
+            let sticks: u32 = m.parse("sticks")?;
+            (sticks > 0).then(|| (f64::from(stair) - f64::from(ramp)) * ipt / f64::from(sticks))
+        });
     let pipeline = pipe.and_then(|p| {
         let n: u32 = p.parse("samples")?;
         let lp: u32 = p.parse("loop_ticks")?;
@@ -830,7 +911,11 @@ pub fn instruction_counts(frames: &[DecodedFrame]) -> Option<InstructionCounts> 
         calibration_ticks,
         instructions_per_tick: ipt,
         instructions_per_sample: per_sample,
-        instructions_per_reversal: per_reversal_sample - per_sample,
+        instructions_per_reversal: per_reversal,
+        instructions_per_sample_stuck: stuck,
+        instructions_per_event_max_age: long.map(|l| l.0),
+        max_event_age: long.map(|l| l.1),
+        instructions_per_sample_without_identification: predict,
         updates,
         update_ticks,
         loop_ticks,
@@ -840,6 +925,7 @@ pub fn instruction_counts(frames: &[DecodedFrame]) -> Option<InstructionCounts> 
         detector_instructions_per_sample: detector.map(|d| d.0),
         detector_instructions_per_reversal: detector.map(|d| d.1),
         pipeline_instructions_per_sample: pipeline,
+        detector_instructions_per_stick: stick,
     })
 }
 

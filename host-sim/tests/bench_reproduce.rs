@@ -61,6 +61,15 @@ fn bench_quick_json_rows_are_complete_and_sane() {
             "{r}"
         );
     }
+    // The firmware recursion's M4F count, measured under QEMU when it is installed.
+    if host_sim::qemu_runner::qemu_available() {
+        for r in rows.iter().filter(|r| {
+            r["method"] == "rdm-recursion" && r["setting"] == "F32Poly (firmware default)"
+        }) {
+            let m4f = num(r, "m4f_instructions_per_sample");
+            assert!(m4f > 5.0 && m4f <= 20.0, "{r}");
+        }
+    }
     let scenes: Vec<&str> = rows.iter().map(|r| r["scene"].as_str().unwrap()).collect();
     for s in ["harmonic", "long-train", "earthquake"] {
         assert!(scenes.contains(&s), "{s}");

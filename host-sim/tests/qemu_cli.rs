@@ -1,8 +1,13 @@
-//! `host-sim qemu [SCENE] --json` end to end on short copies of the default scene (1 s) and of
-//! the El Centro scene (its first 5 s): the firmware's QEMU image built for the scene, every
-//! prediction compared with the host and the closed form, and the goals (firmware = host to
-//! ≤ 1e-6·gμ, ≤ 20 instructions per steady-state sample, board image ≤ 32 KiB flash and ≤ 8 KiB
-//! static RAM).
+//! `host-sim qemu [SCENE] [--model MODEL] --json` end to end on short copies of the default scene
+//! (1–2 s) and of the El Centro scene (its first 5 s): the firmware's QEMU image built for the
+//! scene and the estimator model, every prediction compared with the host and a full-precision
+//! reference, and the goals (firmware = host to ≤ 1e-6·gμ; board image ≤ 32 KiB flash and
+//! ≤ 8 KiB static RAM; the instruction counts measured).
+//!
+//! * the rectangular model (`--model rectangular`): ≤ 20 instructions per steady-state sample,
+//!   the closed form as the reference;
+//! * the stick-slip model, which `model::choose` picks for both scenes (they stick): the f64
+//!   stick-slip estimator as the reference, μ̂ from the firmware.
 //!
 //! Needs `qemu-system-arm` (skipped with a message when missing) and the `thumbv7em-none-eabihf`
 //! target; the first run builds the firmware.
@@ -47,10 +52,14 @@ fn short_copy(dir: &Path, name: &str, duration_s: f64) -> PathBuf {
     path
 }
 
-fn run_json(scene: &Path) -> Value {
+fn run_json(scene: &Path, model: Option<&str>) -> Value {
+    let mut args = vec!["qemu", scene.to_str().unwrap(), "--json"];
+    if let Some(m) = model {
+        args.extend(["--model", m]);
+    }
     let out = Command::cargo_bin("host-sim")
         .unwrap()
-        .args(["qemu", scene.to_str().unwrap(), "--json"])
+        .args(&args)
         .timeout(std::time::Duration::from_secs(600))
         .output()
         .unwrap();
@@ -70,13 +79,13 @@ fn num(v: &Value, key: &str) -> f64 {
         .unwrap_or_else(|| panic!("no number `{key}` in {v}"))
 }
 
-fn check_goals(v: &Value, samples: u64) {
+/// What every model's report must show.
+fn check_common(v: &Value, samples: u64) {
     for key in [
         "samples",
         "max_err_vs_host_gmu",
         "max_err_vs_reference_gmu",
         "instructions_per_sample",
-        "instructions_per_reversal",
         "flash_bytes",
         "ram_bytes",
         "reversals",
@@ -86,25 +95,21 @@ fn check_goals(v: &Value, samples: u64) {
     ] {
         num(v, key);
     }
-    assert!(v["scene"].is_string());
+    assert!(v["scene"].is_string() && v["model"].is_string());
+    assert!(v.get("mu_estimate").is_some());
     assert_eq!(v["samples"].as_u64(), Some(samples));
     assert_eq!(v["passed"], Value::Bool(true));
     assert_eq!(v["frame_mismatches"].as_u64(), Some(0));
+    assert_eq!(v["mu_equals_host"], Value::Bool(true));
     // Firmware = host: bit-identical in practice, the goal is 1e-6 gμ.
     assert!(num(v, "max_err_vs_host_gmu") <= 1e-6);
     assert_eq!(num(v, "max_err_vs_host_gmu"), 0.0);
-    // The f32 recursion against the f64 closed form on the same (detected) train.
-    assert!(num(v, "max_err_vs_reference_gmu") < 1e-5);
     assert!(num(v, "reversals") >= 1.0);
-    let ips = num(v, "instructions_per_sample");
-    assert!(ips > 5.0 && ips <= 20.0, "instructions per sample {ips}");
-    assert!(num(v, "instructions_per_reversal") > 0.0);
     assert!(num(v, "flash_bytes") > 0.0 && num(v, "ram_bytes") > 0.0);
     assert!(num(v, "board_flash_bytes") <= 32.0 * 1024.0);
     assert!(num(v, "board_ram_bytes") <= 8.0 * 1024.0);
     for goal in [
         "firmware_equals_host",
-        "instructions_per_sample_le_20",
         "board_flash_le_32k",
         "board_ram_le_8k",
     ] {
@@ -112,27 +117,106 @@ fn check_goals(v: &Value, samples: u64) {
     }
 }
 
+/// The rectangular model's report.
+fn check_rectangular(v: &Value, samples: u64) {
+    check_common(v, samples);
+    assert_eq!(v["model"], "rectangular");
+    assert_eq!(v["mu_estimate"], Value::Null);
+    // The f32 recursion against the f64 closed form on the same (detected) train.
+    assert!(num(v, "max_err_vs_reference_gmu") < 1e-5);
+    let ips = num(v, "instructions_per_sample");
+    assert!(ips > 5.0 && ips <= 20.0, "instructions per sample {ips}");
+    assert!(num(v, "instructions_per_reversal") > 0.0);
+    for goal in [
+        "instructions_per_sample_le_20",
+        "instructions_per_sample_le_goal",
+    ] {
+        assert_eq!(v["goals"][goal], Value::Bool(true), "goal {goal}");
+    }
+}
+
+/// The stick-slip model's report: the f64 stick-slip estimator as the reference, the measured
+/// instruction counts (the goal of 40 per sample is not met: see docs/PERFORMANCE.md), μ̂.
+fn check_stick_slip(v: &Value, samples: u64) {
+    check_common(v, samples);
+    assert_eq!(v["model"], "stick-slip");
+    assert!(num(v, "history") >= 2.0);
+    // The f32 estimator against the f64 one on the same detected events and inputs (measured
+    // ≤ 5e-6 gμ).
+    assert!(num(v, "max_err_vs_reference_gmu") < 1e-4, "{v}");
+    // Measured: 158 per sliding sample with the μ identification, 99 stuck, 73 sliding without
+    // the identification, ~600 per event at age 0.5.
+    let ips = num(v, "instructions_per_sample");
+    assert!(ips > 40.0 && ips <= 190.0, "instructions per sample {ips}");
+    let stuck = num(v, "instructions_per_sample_stuck");
+    assert!(stuck > 20.0 && stuck <= 120.0, "stuck {stuck}");
+    let bare = num(v, "instructions_per_sample_without_identification");
+    assert!(bare > 20.0 && bare <= 90.0, "without identification {bare}");
+    let ev = num(v, "instructions_per_reversal");
+    assert!(ev > 0.0 && ev < 1500.0, "per event {ev}");
+    assert!(num(v, "instructions_per_event_max_age") > ev);
+    assert_eq!(
+        v["goals"]["instructions_per_sample_goal"].as_f64(),
+        Some(40.0)
+    );
+}
+
 #[test]
-fn qemu_command_on_one_second_of_the_default_scene() {
+fn qemu_command_rectangular_on_one_second_of_the_default_scene() {
     if !qemu_available() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
     let scene = short_copy(dir.path(), "table1.toml", 1.0);
-    let v = run_json(&scene);
-    check_goals(&v, 10_000);
+    let v = run_json(&scene, Some("rectangular"));
+    check_rectangular(&v, 10_000);
     assert_eq!(v["scene"], "table 1 specimen");
+    assert_eq!(v["model_reason"], "chosen with --model");
 }
 
 #[test]
-fn qemu_command_on_the_first_five_seconds_of_el_centro() {
+fn qemu_command_rectangular_on_the_first_five_seconds_of_el_centro() {
     if !qemu_available() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
     let scene = short_copy(dir.path(), "elcentro.toml", 5.0);
-    let v = run_json(&scene);
-    check_goals(&v, 50_000);
+    let v = run_json(&scene, Some("rectangular"));
+    check_rectangular(&v, 50_000);
+}
+
+#[test]
+fn qemu_command_stick_slip_on_two_seconds_of_the_default_scene() {
+    if !qemu_available() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let scene = short_copy(dir.path(), "table1.toml", 2.0);
+    // The base sticks twice per cycle: `model::choose` picks the stick-slip model.
+    let v = run_json(&scene, None);
+    check_stick_slip(&v, 20_000);
+    assert_ne!(v["model_reason"], "chosen with --model");
+    // μ identified from the measured top acceleration while sliding: within 2 % of 0.2 with
+    // enough sliding samples (measured 0.2055 ± 0.0006 over 1 s with 3863, 0.20xx over 2 s).
+    let mu = num(&v, "mu_estimate");
+    let n = num(&v, "mu_samples");
+    assert!(num(&v, "mu_std") > 0.0);
+    if n >= 5000.0 {
+        assert!((mu / 0.2 - 1.0).abs() < 0.02, "mu {mu} from {n} samples");
+    } else {
+        assert!(mu.is_finite() && mu > 0.0, "mu {mu}");
+    }
+}
+
+#[test]
+fn qemu_command_stick_slip_on_the_first_five_seconds_of_el_centro() {
+    if !qemu_available() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let scene = short_copy(dir.path(), "elcentro.toml", 5.0);
+    let v = run_json(&scene, None);
+    check_stick_slip(&v, 50_000);
 }
 
 #[test]

@@ -14,7 +14,8 @@
 //! Run: `cargo test -p host-sim --test qemu_smoke -- --nocapture` (prints instruction counts and
 //! sizes).
 
-use host_sim::qemu_cmd::{host_frames, DetectorSetup, HostFrame};
+use host_sim::model::Model;
+use host_sim::qemu_cmd::{host_frames, host_run, DetectorSetup, HostFrame};
 use host_sim::qemu_runner::{
     self, event_kind, frame_flags as ff, LogHeader, LogReversal, LogSample, SampleFrame,
     OPTION_LOG_REVERSALS,
@@ -214,7 +215,7 @@ fn qemu_image_runs_the_detector_like_the_host() {
     );
     let (flash, ram) = qemu_runner::elf_sizes(&elf).unwrap();
     eprintln!(
-        "qemu image: estimator {:.2} instructions/sample, +{:.1}/reversal; detector {:?}/sample, \
+        "qemu image: estimator {:.2} instructions/sample, +{:?}/reversal; detector {:?}/sample, \
          +{:?}/reversal; whole step {:?}/sample; flash={flash} B ram={ram} B",
         ic.instructions_per_sample,
         ic.instructions_per_reversal,
@@ -223,6 +224,7 @@ fn qemu_image_runs_the_detector_like_the_host() {
         ic.pipeline_instructions_per_sample
     );
     assert!(ic.instructions_per_sample > 0.0);
+    assert!(ic.instructions_per_reversal.unwrap() > 0.0);
     assert!(ic.detector_instructions_per_sample.unwrap() > 0.0);
     assert!(ic.detector_instructions_per_reversal.unwrap() > 0.0);
 }
@@ -320,6 +322,106 @@ fn qemu_image_log_reversal_hook_feeds_the_estimator() {
             assert!(f.prediction_m_s2.abs() <= 4.0 * gmu, "prediction @{k}");
         }
     }
+}
+
+/// The stick-slip model through the log-reversal hook: events of every kind (a stick is level 0)
+/// and age, one older than the history (clamped), invalid samples (a NaN, a saturated and a
+/// missing top acceleration are not used for the μ identification), 2000 samples (the
+/// identification runs from sample history − 1 on). Every frame, the stats and μ̂ equal the
+/// host's.
+#[test]
+fn qemu_image_stick_slip_model_matches_the_host() {
+    if skip() {
+        return;
+    }
+    let scene = Scene::default_scene();
+    let dir = tempfile::tempdir().unwrap();
+    let elf = qemu_runner::build_for_scene_model(
+        &qemu_runner::default_firmware_dir(),
+        &scene,
+        Model::StickSlip,
+        dir.path(),
+        false,
+    )
+    .unwrap()
+    .qemu_elf;
+    let setup = DetectorSetup::for_scene_model(&scene, Model::StickSlip).unwrap();
+    let old = setup.max_age as f32 + 30.5;
+    // (sample, level, age): slip, stick 100.5 samples back, slip the other way, an event older
+    // than the history, a stick on a sample boundary, a slip.
+    let events = [
+        (50, 1, 0.25),
+        (400, 0, 100.5),
+        (420, -1, 3.75),
+        (900, 1, old),
+        (1300, 0, 12.0),
+        (1350, 1, 0.0),
+    ];
+    let n = 2000;
+    let input: Vec<LogSample> = (0..n)
+        .map(|k| {
+            let t = k as f32 / 1e4;
+            let mut s = LogSample {
+                table_accel_m_s2: 2.0 * (2.0 * std::f32::consts::PI * 7.0 * t).sin(),
+                base_accel_m_s2: 1.5 * (2.0 * std::f32::consts::PI * 7.0 * t).sin(),
+                top_accel_m_s2: 1.8 * (2.0 * std::f32::consts::PI * 7.0 * t).cos(),
+                displacement_m: 1e-6 * k as f32,
+                ..LogSample::default()
+            };
+            match k {
+                610 => s.top_accel_m_s2 = f32::NAN,
+                611 => s.saturated = true,
+                612 => {
+                    s.missing = true;
+                    s.table_accel_m_s2 = f32::NAN;
+                    s.base_accel_m_s2 = f32::NAN;
+                    s.top_accel_m_s2 = f32::NAN;
+                    s.displacement_m = f32::NAN;
+                }
+                _ => {}
+            }
+            if let Some(&(_, level, age)) = events.iter().find(|e| e.0 == k) {
+                s.reversal = Some(LogReversal {
+                    level,
+                    age_samples: age,
+                });
+            }
+            s
+        })
+        .collect();
+    let header = LogHeader {
+        options: OPTION_LOG_REVERSALS,
+        ..LogHeader::for_scene(&scene)
+    };
+    let (out, frames) = run(dir.path(), &elf, "ss.ssvrlog", &header, &input);
+    let host = host_run(&scene, &setup, Model::StickSlip, &input, true).unwrap();
+    assert_matches_host(&out, &input, &host.frames);
+    setup.check_model(&frames, Model::StickSlip).unwrap();
+
+    let stats = frames.iter().find(|f| f.kind() == "stats").unwrap();
+    assert_eq!(stats.field("reversals"), Some("6"));
+    assert_eq!(stats.field("rejected"), Some("0"));
+    assert_eq!(stats.field("clamped"), Some("1"));
+    assert_eq!(host.clamped, 1);
+    for &(k, _, _) in &events {
+        assert_eq!(out[k].flags & ff::REVERSAL, ff::REVERSAL, "flags @{k}");
+    }
+    let mu = host_sim::qemu_cmd::firmware_mu(&frames).expect("mu estimate");
+    let want = host.mu.expect("host mu");
+    assert_eq!(mu, (want.mu, want.std, want.samples));
+    assert!(want.samples > 100, "{want:?}");
+    let ic = qemu_runner::instruction_counts(&frames).unwrap();
+    eprintln!(
+        "stick-slip image: {:.2} instructions/sliding sample, {:?} stuck, {:?} without the \
+         identification, +{:?}/event (age 0.5), +{:?}/event (age {:?})",
+        ic.instructions_per_sample,
+        ic.instructions_per_sample_stuck,
+        ic.instructions_per_sample_without_identification,
+        ic.instructions_per_reversal,
+        ic.instructions_per_event_max_age,
+        ic.max_event_age
+    );
+    assert_eq!(ic.reversal_errors, 0);
 }
 
 #[test]

@@ -29,15 +29,13 @@ mod scene_board {
 #[cfg(feature = "bench")]
 use super::bench;
 use super::pipeline::{self, flags, EventSource, FrameOut, Pipeline, Sample, DISP, QUEUE_LEN};
-use super::{scene, stack};
+use super::{model, scene, stack};
 use ads131m04::Ads131m04;
 use core::cell::RefCell;
 use critical_section::Mutex;
 use defmt_rtt as _;
 use embedded_hal_bus::spi::{ExclusiveDevice, NoDelay};
 use heapless::spsc::{Producer, Queue};
-use ssvr_core::duhamel_recursion::Estimator32;
-use ssvr_core::Structure;
 use stm32f4xx_hal::gpio::{Output, PinState, PushPull, PB6};
 use stm32f4xx_hal::pac::{self, interrupt, Interrupt, SPI1, TIM2};
 use stm32f4xx_hal::prelude::*;
@@ -100,10 +98,11 @@ pub fn run() -> ! {
     };
     let painted = stack::paint();
     defmt::info!(
-        "ssvr board image: scene {=str}, {=u32} Hz, detector ring {=u32}",
+        "ssvr board image: scene {=str}, {=u32} Hz, detector ring {=u32}, model {=str}",
         scene::SCENE_PATH,
         scene_board::TIMER_RATE_HZ,
-        scene::DETECTOR_RING as u32
+        scene::DETECTOR_RING as u32,
+        model::NAME
     );
 
     // 8 MHz HSE from the ST-LINK MCO (bypass), 180 MHz core.
@@ -138,19 +137,18 @@ pub fn run() -> ! {
         halt()
     }
 
-    let structure = match Structure::new(scene::STRUCTURE) {
-        Ok(s) => s,
+    let estimator = match model::new() {
+        Ok(e) => e,
         Err(e) => {
-            defmt::error!("invalid structure in the scene: {=str}", e.param().name());
+            defmt::error!(
+                "invalid structure or estimator in the scene: {=str}",
+                e.param().name()
+            );
             halt()
         }
     };
-    let rate = scene::SAMPLE_RATE_HZ;
-    let (Ok(estimator), Ok(detector)) = (
-        Estimator32::new(&structure, rate),
-        scene::Detector::new(scene::DETECTOR),
-    ) else {
-        defmt::error!("the estimator or the detector rejected the scene");
+    let Ok(detector) = scene::Detector::new(scene::DETECTOR) else {
+        defmt::error!("the detector rejected the scene");
         halt()
     };
 
@@ -198,10 +196,11 @@ pub fn run() -> ! {
                 SAMPLE_SIDE
                     .borrow_ref(cs)
                     .as_deref()
-                    .map(|s| s.pipeline.stats)
+                    .map(|s| (s.pipeline.stats, model::mu_estimate(s.pipeline.estimator())))
             });
-            if let Some(s) = stats {
+            if let Some((s, mu)) = stats {
                 pipeline::emit_stats(&s);
+                model::emit_mu(mu);
             }
             stack::report(&painted);
         }

@@ -13,14 +13,19 @@
 //!    or beyond the compiled-in full scale `scene::DISP_RANGE_M`;
 //! 2. the detector (`ssvr_core::reversal_detector`) processes the displacement, or NaN when it is
 //!    unusable (the detector then repeats its last value and keeps time);
-//! 3. a slip start or reversal is pushed to the estimator as
-//!    `push_reversal(event.friction_level(), event.age_samples())`; a stick is reported but not
-//!    pushed (the rectangular model keeps its level);
-//! 4. `update()` gives the prediction of this sample (always, valid sample or not).
+//! 3. the event goes to the estimator of the compiled-in model ([`super::model::push`]):
+//!    rectangular: a slip start or reversal as `push_reversal(event.friction_level(),
+//!    event.age_samples())`, a stick is reported but not pushed (the rectangular model keeps its
+//!    level); stick-slip: every event as `push_event(level, age)` (0 for a stick); fixed-base:
+//!    none;
+//! 4. the model's update gives the prediction of this sample (always, valid sample or not): the
+//!    rectangular `update()`, or the stick-slip `update(table, top)` with the measured table
+//!    acceleration and the measured top acceleration (NaN, i.e. not used for the friction
+//!    identification, when the sample is saturated or missing).
 
+use super::model::{self, Estimator, Pushed};
 use super::scene::{self, Detector};
 use heapless::spsc::{Consumer, Producer};
-use ssvr_core::duhamel_recursion::Estimator32;
 use ssvr_core::reversal_detector::SlipEvent;
 
 /// Number of measured channels: table accel, base accel, top accel (m/s²), base-to-table
@@ -50,7 +55,8 @@ pub mod flags {
     pub const MISSING: u8 = 1 << 2;
     /// Frames were lost before this one because the streaming queue was full.
     pub const OVERRUN: u8 = 1 << 3;
-    /// A friction event (slip start or reversal) was pushed to the estimator at this sample.
+    /// A friction event was pushed to the estimator at this sample (rectangular model: a slip
+    /// start or reversal; stick-slip model: any event, sticks included).
     pub const REVERSAL: u8 = 1 << 4;
     /// The estimator rejected the event (invalid level/age).
     pub const REVERSAL_REJECTED: u8 = 1 << 5;
@@ -71,7 +77,7 @@ pub enum EventKind {
     SlipStart = 1,
     /// The detector saw the sliding direction reverse (pushed).
     Reversal = 2,
-    /// The detector saw the base stick (reported, not pushed).
+    /// The detector saw the base stick (pushed by the stick-slip model only).
     Stick = 3,
     /// A reversal event of the sensor log (test hook of the QEMU image; pushed).
     Log = 4,
@@ -101,11 +107,6 @@ impl Event {
             level: e.friction_level() as i8,
             age_samples: e.age_samples(),
         }
-    }
-
-    /// Whether the event goes to the estimator (everything but a stick).
-    pub fn pushes(&self) -> bool {
-        self.kind != EventKind::Stick
     }
 }
 
@@ -184,13 +185,15 @@ pub struct Stats {
     pub reversals: u32,
     /// Events rejected by the estimator.
     pub rejected: u32,
-    /// Sticks (not pushed).
+    /// Sticks (pushed by the stick-slip model only).
     pub sticks: u32,
+    /// Events pushed with their age clamped to the stick-slip history.
+    pub clamped: u32,
 }
 
 /// The detector, the estimator and the sample clock.
 pub struct Pipeline {
-    estimator: Estimator32,
+    estimator: Estimator,
     detector: Detector,
     source: EventSource,
     index: u32,
@@ -201,7 +204,7 @@ pub struct Pipeline {
 
 impl Pipeline {
     /// Start at sample 0.
-    pub fn new(estimator: Estimator32, detector: Detector, source: EventSource) -> Self {
+    pub fn new(estimator: Estimator, detector: Detector, source: EventSource) -> Self {
         Self {
             estimator,
             detector,
@@ -243,25 +246,26 @@ impl Pipeline {
         };
         if let Some(e) = &event {
             self.stats.events = self.stats.events.wrapping_add(1);
-            if e.pushes() {
-                match self
-                    .estimator
-                    .push_reversal(f32::from(e.level), e.age_samples)
-                {
-                    Ok(()) => {
-                        f |= flags::REVERSAL;
-                        self.stats.reversals = self.stats.reversals.wrapping_add(1);
-                    }
-                    Err(_) => {
-                        f |= flags::REVERSAL_REJECTED;
-                        self.stats.rejected = self.stats.rejected.wrapping_add(1);
-                    }
-                }
-            } else {
+            if e.kind == EventKind::Stick {
                 self.stats.sticks = self.stats.sticks.wrapping_add(1);
             }
+            match model::push(&mut self.estimator, e) {
+                Ok(Pushed::No) => {}
+                Ok(p) => {
+                    f |= flags::REVERSAL;
+                    self.stats.reversals = self.stats.reversals.wrapping_add(1);
+                    if p == Pushed::Clamped {
+                        self.stats.clamped = self.stats.clamped.wrapping_add(1);
+                    }
+                }
+                Err(_) => {
+                    f |= flags::REVERSAL_REJECTED;
+                    self.stats.rejected = self.stats.rejected.wrapping_add(1);
+                }
+            }
         }
-        let prediction = self.estimator.update();
+        let top_valid = f & (flags::SATURATED | flags::MISSING) == 0;
+        let prediction = model::update(&mut self.estimator, &s.channels, top_valid);
         if f & flags::INVALID != 0 {
             self.stats.invalid = self.stats.invalid.wrapping_add(1);
         }
@@ -275,6 +279,11 @@ impl Pipeline {
         self.index = self.index.wrapping_add(1);
         self.stats.samples = self.stats.samples.wrapping_add(1);
         frame
+    }
+
+    /// The estimator.
+    pub fn estimator(&self) -> &Estimator {
+        &self.estimator
     }
 
     /// [`Self::step`], then queue the frame; a full queue drops it and flags the next frame
@@ -338,13 +347,14 @@ pub fn drain(consumer: &mut Consumer<'_, FrameOut>) -> u32 {
 /// Report the counters of a run.
 pub fn emit_stats(s: &Stats) {
     defmt::info!(
-        "stats samples={=u32} invalid={=u32} dropped={=u32} events={=u32} reversals={=u32} rejected={=u32} sticks={=u32}",
+        "stats samples={=u32} invalid={=u32} dropped={=u32} events={=u32} reversals={=u32} rejected={=u32} sticks={=u32} clamped={=u32}",
         s.samples,
         s.invalid,
         s.dropped,
         s.events,
         s.reversals,
         s.rejected,
-        s.sticks
+        s.sticks,
+        s.clamped
     );
 }

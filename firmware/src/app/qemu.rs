@@ -14,11 +14,9 @@ use super::pipeline::{self, EventSource, FrameOut, Pipeline, QUEUE_LEN};
 use super::sensor_log::{
     self, options, Header, LogError, COUNT_UNTIL_EOF, HEADER_LEN, RECORD_LEN, REVERSAL_LEN,
 };
-use super::{bench, scene, stack};
+use super::{bench, model, scene, stack};
 use cortex_m_semihosting::nr;
 use heapless::spsc::Queue;
-use ssvr_core::duhamel_recursion::Estimator32;
-use ssvr_core::Structure;
 
 use defmt_semihosting as _;
 
@@ -38,8 +36,8 @@ pub mod status {
     pub const LOG_OPEN: u32 = 2;
     /// The log header is invalid.
     pub const LOG_HEADER: u32 = 3;
-    /// The compiled-in structure is invalid or the estimator/detector refused it (build.rs
-    /// validates the scene, so this should not happen).
+    /// The compiled-in structure or estimator coefficients are invalid or the
+    /// estimator/detector refused them (build.rs validates the scene, so this should not happen).
     pub const STRUCTURE: u32 = 4;
     /// The log could not be read or is truncated.
     pub const LOG_READ: u32 = 5;
@@ -205,8 +203,8 @@ fn scene_mismatch(h: &Header) -> Option<(&'static str, f64, f64)> {
     .find(|&(_, log, fw)| log != fw)
 }
 
-/// Report the compiled-in scene and detector settings (`scene ...`, then `detector <Debug form
-/// of the DetectorConfig>`).
+/// Report the compiled-in scene, detector settings and model (`scene ...`, then `detector <Debug
+/// form of the DetectorConfig>`, then `model ...`).
 fn emit_scene() {
     defmt::info!(
         "scene rate_hz={=f64} ring={=u32} disp_range_m={=f32} path={=str}",
@@ -216,6 +214,7 @@ fn emit_scene() {
         scene::SCENE_PATH
     );
     defmt::info!("detector {=str}", scene::DETECTOR_DEBUG);
+    model::emit();
 }
 
 /// Replay the log, run the benchmark, exit.
@@ -228,17 +227,18 @@ pub fn run() -> ! {
     let mut ticks = bench::Ticks::new(cp.SYST);
     emit_scene();
 
-    let structure = match Structure::new(scene::STRUCTURE) {
-        Ok(s) => s,
+    let estimator = match model::new() {
+        Ok(e) => e,
         Err(e) => {
-            defmt::error!("invalid compiled-in structure: {=str}", e.param().name());
+            defmt::error!(
+                "the compiled-in structure or estimator is invalid: {=str}",
+                e.param().name()
+            );
             exit(status::STRUCTURE)
         }
     };
-    let make_estimator = || Estimator32::new(&structure, scene::SAMPLE_RATE_HZ);
-    let (Ok(estimator), Ok(detector)) = (make_estimator(), scene::Detector::new(scene::DETECTOR))
-    else {
-        defmt::error!("the estimator or the detector rejected the compiled-in scene");
+    let Ok(detector) = scene::Detector::new(scene::DETECTOR) else {
+        defmt::error!("the detector rejected the compiled-in scene");
         exit(status::STRUCTURE)
     };
 
@@ -350,12 +350,13 @@ pub fn run() -> ! {
     }
     let _ = pipeline::drain(&mut consumer);
     pipeline::emit_stats(&pipe.stats);
+    model::emit_mu(model::mu_estimate(pipe.estimator()));
     if let Some(e) = read_error {
         defmt::error!("sensor log read failed after {=u32} samples: {}", n, e);
         exit(status::LOG_READ)
     }
 
-    match (make_estimator(), scene::Detector::new(scene::DETECTOR)) {
+    match (model::new(), scene::Detector::new(scene::DETECTOR)) {
         (Ok(e), Ok(d)) => bench::run(&mut ticks, e, d),
         _ => exit(status::STRUCTURE),
     }

@@ -1,0 +1,174 @@
+//! The estimator model compiled in: `SSVR_MODEL` at build time (build.rs sets the cfg
+//! `ssvr_model`; default `rectangular`). Only that model's code is in the image.
+//!
+//! * **rectangular**: the paper's rectangular friction, `Estimator32` (the O(1) Duhamel
+//!   recursion); slip starts and reversals are pushed as `push_reversal(level, age)`, sticks are
+//!   reported, not pushed (the model keeps its level);
+//! * **stick-slip**: `StickSlipEstimator<f32, F32Poly, HISTORY>`, driven by the measured table
+//!   acceleration (and the measured top acceleration for the friction identification): slip
+//!   starts and reversals are pushed as `push_event(level, age)`, sticks as `push_event(0, age)`;
+//!   an age beyond the history (`MAX_EVENT_AGE_SAMPLES`, the detector's usual longest
+//!   back-dating) is clamped to it;
+//! * **fixed-base**: the same estimator, no event pushed (the base never slides).
+//!
+//! host-sim's `qemu_cmd::HostPipeline` mirrors these functions line by line.
+
+use super::pipeline::{Event, EventKind};
+use super::scene;
+use ssvr_core::Error;
+
+/// The model's name (`fixed-base`, `rectangular`, `stick-slip`).
+pub const NAME: &str = scene::MODEL;
+
+/// The estimator of the model.
+#[cfg(ssvr_model = "rectangular")]
+pub type Estimator = ssvr_core::duhamel_recursion::Estimator32;
+/// The estimator of the model.
+#[cfg(not(ssvr_model = "rectangular"))]
+pub type Estimator = ssvr_core::stick_slip_estimator::StickSlipEstimator<
+    f32,
+    ssvr_core::math::F32Poly,
+    { scene::HISTORY },
+>;
+
+/// The largest event age pushed (samples); older events are clamped to it.
+#[cfg(ssvr_model = "stick_slip")]
+pub const MAX_AGE: f32 = scene::MAX_EVENT_AGE_SAMPLES as f32;
+
+/// Index of the table acceleration channel.
+const TABLE: usize = 0;
+/// Index of the top acceleration channel.
+const TOP: usize = 2;
+
+/// The estimator for the compiled-in scene, at rest. The rectangular model computes its tables
+/// from the structure (f64, at start-up); the stick-slip estimator restores its coefficients,
+/// computed by build.rs (`scene::STICK_SLIP_COEFFICIENTS`).
+pub fn new() -> Result<Estimator, Error> {
+    #[cfg(ssvr_model = "rectangular")]
+    {
+        let structure = ssvr_core::Structure::new(scene::STRUCTURE)?;
+        Estimator::new(&structure, scene::SAMPLE_RATE_HZ)
+    }
+    #[cfg(not(ssvr_model = "rectangular"))]
+    {
+        with_config(scene::STICK_SLIP)
+    }
+}
+
+/// The stick-slip estimator of the compiled-in scene with other settings (the benchmark's
+/// prediction-only run).
+#[cfg(not(ssvr_model = "rectangular"))]
+pub fn with_config(
+    cfg: ssvr_core::stick_slip_estimator::StickSlipConfig,
+) -> Result<Estimator, Error> {
+    let c = ssvr_core::stick_slip_estimator::StickSlipCoefficients::from_bits(
+        &scene::STICK_SLIP_COEFFICIENTS,
+    )
+    .ok_or(Error::NotFinite(ssvr_core::Param::SampleRate))?;
+    Estimator::from_coefficients(c, cfg, scene::HISTORY)
+}
+
+/// What [`push`] did with an event (each model uses some of these).
+#[allow(dead_code)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Pushed {
+    /// The model does not use this event (a stick for the rectangular model, every event for
+    /// the fixed-base model).
+    No,
+    /// Pushed.
+    Yes,
+    /// Pushed with its age clamped to [`MAX_AGE`] (stick-slip model).
+    Clamped,
+}
+
+/// Give a friction event to the estimator (before the sample's [`update`]).
+#[cfg(ssvr_model = "rectangular")]
+pub fn push(est: &mut Estimator, e: &Event) -> Result<Pushed, Error> {
+    if e.kind == EventKind::Stick {
+        return Ok(Pushed::No);
+    }
+    est.push_reversal(f32::from(e.level), e.age_samples)?;
+    Ok(Pushed::Yes)
+}
+
+/// Give a friction event to the estimator (before the sample's [`update`]).
+#[cfg(ssvr_model = "stick_slip")]
+pub fn push(est: &mut Estimator, e: &Event) -> Result<Pushed, Error> {
+    let phase = if e.kind == EventKind::Stick {
+        0
+    } else {
+        e.level
+    };
+    if e.age_samples > MAX_AGE {
+        est.push_event(phase, MAX_AGE)?;
+        Ok(Pushed::Clamped)
+    } else {
+        est.push_event(phase, e.age_samples)?;
+        Ok(Pushed::Yes)
+    }
+}
+
+/// Give a friction event to the estimator: the fixed-base model ignores every event.
+#[cfg(ssvr_model = "fixed_base")]
+pub fn push(_est: &mut Estimator, _e: &Event) -> Result<Pushed, Error> {
+    let _ = EventKind::Stick;
+    Ok(Pushed::No)
+}
+
+/// The prediction of this sample. `channels`: table accel, base accel, top accel, displacement;
+/// `top_valid`: the top acceleration may be used for the friction identification (not
+/// saturated, not missing; a non-finite value is skipped anyway).
+#[inline(always)]
+pub fn update(est: &mut Estimator, channels: &[f32; 4], top_valid: bool) -> f32 {
+    #[cfg(ssvr_model = "rectangular")]
+    {
+        let _ = (channels, top_valid, TABLE, TOP);
+        est.update()
+    }
+    #[cfg(not(ssvr_model = "rectangular"))]
+    {
+        let top = if top_valid { channels[TOP] } else { f32::NAN };
+        est.update(channels[TABLE], top)
+    }
+}
+
+/// The identified friction coefficient: (μ̂, std, samples used); `None` for the rectangular
+/// model or before any sliding sample was used.
+pub fn mu_estimate(est: &Estimator) -> Option<(f64, f64, u32)> {
+    #[cfg(ssvr_model = "rectangular")]
+    {
+        let _ = est;
+        None
+    }
+    #[cfg(not(ssvr_model = "rectangular"))]
+    {
+        est.mu_estimate().map(|m| (m.mu, m.std, m.samples))
+    }
+}
+
+/// Report the model (`model name=.. history=.. max_age=.. config=..`; the history and the
+/// settings are those of the stick-slip estimator, also reported for the rectangular model).
+#[cfg_attr(not(feature = "qemu"), allow(dead_code))]
+pub fn emit() {
+    defmt::info!(
+        "model name={=str} history={=u32} max_age={=u32} config={=str}",
+        NAME,
+        scene::HISTORY as u32,
+        scene::MAX_EVENT_AGE_SAMPLES as u32,
+        scene::STICK_SLIP_DEBUG
+    );
+}
+
+/// Report the identified friction coefficient `mu` ([`mu_estimate`]): `mu estimate=.. std=..
+/// samples=..`, or `mu none` when there is none yet; nothing for the rectangular model.
+pub fn emit_mu(mu: Option<(f64, f64, u32)>) {
+    if cfg!(ssvr_model = "rectangular") {
+        return;
+    }
+    match mu {
+        Some((mu, std, n)) => {
+            defmt::info!("mu estimate={=f64} std={=f64} samples={=u32}", mu, std, n)
+        }
+        None => defmt::info!("mu none"),
+    }
+}
