@@ -200,7 +200,7 @@ impl<const N: usize> ReversalDetector<N> {
     }
 
     fn at(&self, i: u64) -> f32 {
-        self.ring[(i % N as u64) as usize]
+        self.ring[slot::<N>(i)]
     }
 
     /// Process one displacement sample (m) and the measured slip acceleration, base minus table
@@ -211,11 +211,11 @@ impl<const N: usize> ReversalDetector<N> {
         let a = if slip_accel.is_finite() {
             slip_accel
         } else if k > 0 {
-            self.accel[((k - 1) % N as u64) as usize]
+            self.accel[slot::<N>(k - 1)]
         } else {
             0.0
         };
-        self.accel[(k % N as u64) as usize] = a;
+        self.accel[slot::<N>(k)] = a;
         self.step(x)
     }
 
@@ -235,7 +235,7 @@ impl<const N: usize> ReversalDetector<N> {
         } else {
             0.0
         };
-        self.ring[(k % N as u64) as usize] = x;
+        self.ring[slot::<N>(k)] = x;
         self.k += 1;
         if k == 0 {
             self.ext = x;
@@ -257,7 +257,10 @@ impl<const N: usize> ReversalDetector<N> {
                     i0 -= 1;
                 }
                 let lo = i0.saturating_sub(2 * l).max(oldest);
-                let (a, b) = (i0.saturating_sub(l).max(lo) as f32, (i0 + l).min(k) as f32);
+                let (a, b) = (
+                    rel(i0.saturating_sub(l).max(lo), k),
+                    rel((i0 + l).min(k), k),
+                );
                 // The breakaway's shape depends on how the friction demand crosses the limit:
                 // u² (μs > μ: a finite jump), u³ (a linear crossing), u⁴ (a tangent one).
                 let powers: &[i32] = if self.cfg.cubic_breakaway {
@@ -265,19 +268,21 @@ impl<const N: usize> ReversalDetector<N> {
                 } else {
                     &[2]
                 };
-                let mut t0 = k as f32;
                 let mut best = f32::INFINITY;
-                if self.has_accel {
-                    t0 = self.zero_velocity_fit(lo, k, (a, b)).0;
+                let t0 = if self.has_accel {
+                    self.zero_velocity_fit(lo, k, (a, b)).0
                 } else {
+                    // The power with the best coarse fit, then refined.
+                    let mut power = 2;
                     for &pw in powers {
-                        let (t, r) = self.kink_fit(lo, k, (a, b), false, pw);
+                        let (_, r) = self.kink_fit(lo, k, (a, b), false, pw, false);
                         if r < best {
                             best = r;
-                            t0 = t;
+                            power = pw;
                         }
                     }
-                }
+                    self.kink_fit(lo, k, (a, b), false, power, true).0
+                };
                 self.direction = direction;
                 self.ext = x;
                 self.ext_k = k;
@@ -285,7 +290,7 @@ impl<const N: usize> ReversalDetector<N> {
                 self.stall_k = k;
                 return Some(SlipEvent::SlipStart {
                     direction,
-                    age_samples: (k as f32 - t0).max(0.0),
+                    age_samples: (-t0).max(0.0),
                 });
             }
             return None;
@@ -309,7 +314,7 @@ impl<const N: usize> ReversalDetector<N> {
             self.stall_k = k;
             return Some(SlipEvent::Reversal {
                 direction,
-                age_samples: (k as f32 - te).max(0.0),
+                age_samples: (-te).max(0.0),
             });
         }
         if k - self.stall_k >= self.cfg.stick_samples as u64 {
@@ -324,13 +329,13 @@ impl<const N: usize> ReversalDetector<N> {
             self.ext = sum / n as f32;
             self.ext_k = k;
             return Some(SlipEvent::Stick {
-                age_samples: (k as f32 - te).max(0.0),
+                age_samples: (-te).max(0.0),
             });
         }
         None
     }
 
-    /// Vertex time (sample units, absolute) of the extremum at `ext_k`, from parabola fits on each
+    /// Vertex time (samples, relative to the current sample k) of the extremum at `ext_k`, from parabola fits on each
     /// side; the current sample is `k`.
     fn vertex_time(&self, k: u64) -> f32 {
         let e = self.ext_k;
@@ -338,32 +343,36 @@ impl<const N: usize> ReversalDetector<N> {
         let oldest = k.saturating_sub(N as u64 - 1);
         if self.has_accel {
             let lo = e.saturating_sub(2 * l).max(oldest);
-            let (a, b) = (e.saturating_sub(l).max(lo) as f32, (e + l).min(k) as f32);
+            let (a, b) = (rel(e.saturating_sub(l).max(lo), k), rel((e + l).min(k), k));
             return self.zero_velocity_fit(lo, k, (a, b)).0;
         }
         let lo = e.saturating_sub(l).max(oldest);
         let hi = (e + l).min(k);
-        let left = fit_vertex(|i| self.at(i), lo, e + 1.min(k - e));
-        let right = fit_vertex(|i| self.at(i), e.saturating_sub(1).max(oldest), hi);
+        let left = fit_vertex(|i| self.at(i), lo, e + 1.min(k - e), k);
+        let right = fit_vertex(|i| self.at(i), e.saturating_sub(1).max(oldest), hi, k);
+        let er = rel(e, k);
         let guard =
-            |v: Option<(f32, u64)>| v.filter(|(t, _)| libm::fabsf(*t - e as f32) <= 2.0 + l as f32);
+            |v: Option<(f32, u64)>| v.filter(|(t, _)| libm::fabsf(*t - er) <= 2.0 + l as f32);
         match (guard(left), guard(right)) {
             (Some((a, na)), Some((b, nb))) => (a * na as f32 + b * nb as f32) / (na + nb) as f32,
             (Some((a, _)), None) | (None, Some((a, _))) => a,
-            (None, None) => e as f32,
+            (None, None) => er,
         }
     }
 
-    /// Stick time (absolute sample units): the slip x = x_s − c·(t_s − t)² before t_s and x_s after
+    /// Stick time (samples relative to the current sample k): the slip x = x_s − c·(t_s − t)² before t_s and x_s after
     /// (constant deceleration to rest), fitted around the start of the stall.
     fn stick_time(&self, k: u64) -> f32 {
         let l = self.cfg.fit_half as u64;
         let lo = self.stall_k.saturating_sub(2 * l);
-        let (a, b) = (self.stall_k.saturating_sub(l), (self.stall_k + l).min(k));
+        let (a, b) = (
+            rel(self.stall_k.saturating_sub(l).max(lo), k),
+            rel((self.stall_k + l).min(k), k),
+        );
         if self.has_accel {
-            return self.zero_velocity_fit(lo, k, (a as f32, b as f32)).0;
+            return self.zero_velocity_fit(lo, k, (a, b)).0;
         }
-        self.kink_fit(lo, k, (a as f32, b as f32), true, 2).0
+        self.kink_fit(lo, k, (a, b), true, 2, true).0
     }
 
     /// The time t_e at which the slip velocity is zero (a reversal, a stick or a breakaway), from
@@ -376,7 +385,7 @@ impl<const N: usize> ReversalDetector<N> {
         let n = (hi - lo) as usize;
         // Prefix integrals (trapezoid, a linear between samples, σ in samples from lo):
         // s0[i] = ∫_lo^i a, s1[i] = ∫_lo^i σ a.
-        let acc = |i: u64| self.accel[(i % N as u64) as usize];
+        let acc = |i: u64| self.accel[slot::<N>(i)];
         let at_window = |i: usize| acc(lo + i as u64);
         let mut s0 = [0.0f32; N];
         let mut s1 = [0.0f32; N];
@@ -394,7 +403,8 @@ impl<const N: usize> ReversalDetector<N> {
         };
         let last = n.min(N - 1);
         let x0 = self.at(hi);
-        let lo_f = lo as f32;
+        // Times relative to hi (t_e, a and b too).
+        let lo_f = rel(lo, hi);
         let resid = |te: f32| {
             // The acceleration jumps at t_e (inside sample interval j): extrapolate each side's
             // samples linearly up to t_e instead of interpolating across the jump.
@@ -450,7 +460,7 @@ impl<const N: usize> ReversalDetector<N> {
             }
             r
         };
-        let (a, b) = (a.max(lo_f), b.min(hi as f32));
+        let (a, b) = (a.max(lo_f), b.min(0.0));
         let (mut best, mut best_r) = (a, f32::INFINITY);
         let mut t = a;
         while t <= b {
@@ -461,7 +471,7 @@ impl<const N: usize> ReversalDetector<N> {
             }
             t += 1.0;
         }
-        let (mut lo_t, mut hi_t) = ((best - 1.0).max(lo_f), (best + 1.0).min(hi as f32));
+        let (mut lo_t, mut hi_t) = ((best - 1.0).max(lo_f), (best + 1.0).min(0.0));
         let gr = 0.618_034f32;
         for _ in 0..14 {
             let (m1, m2) = (hi_t - gr * (hi_t - lo_t), lo_t + gr * (hi_t - lo_t));
@@ -486,13 +496,22 @@ impl<const N: usize> ReversalDetector<N> {
         (a, b): (f32, f32),
         before: bool,
         power: i32,
+        refine: bool,
     ) -> (f32, f32) {
         let lo = lo.max(hi.saturating_sub(N as u64 - 1));
         let x0 = self.at(hi);
+        // Times relative to hi (t_s, a and b too).
         let reg = |ts: f32, i: u64| {
-            let u = if before { ts - i as f32 } else { i as f32 - ts };
+            let ti = rel(i, hi);
+            let u = if before { ts - ti } else { ti - ts };
             if u > 0.0 {
-                libm::powf(u, power as f32)
+                // Integer powers by multiplication (powf is ~100× slower on the M4F).
+                let u2 = u * u;
+                match power {
+                    2 => u2,
+                    3 => u2 * u,
+                    _ => u2 * u2,
+                }
             } else {
                 0.0
             }
@@ -522,6 +541,8 @@ impl<const N: usize> ReversalDetector<N> {
             }
             r
         };
+        // A coarse grid (every 3 samples; the residual is smooth in t_s), then golden-section
+        // refinement over ±3 samples around its best point (`refine`).
         let (mut best, mut best_r) = (a, f32::INFINITY);
         let mut t = a;
         while t <= b {
@@ -530,11 +551,14 @@ impl<const N: usize> ReversalDetector<N> {
                 best_r = r;
                 best = t;
             }
-            t += 1.0;
+            t += 3.0;
         }
-        let (mut lo_t, mut hi_t) = (best - 1.0, best + 1.0);
+        if !refine {
+            return (best, best_r);
+        }
+        let (mut lo_t, mut hi_t) = (best - 3.0, best + 3.0);
         let gr = 0.618_034f32;
-        for _ in 0..12 {
+        for _ in 0..16 {
             let (m1, m2) = (hi_t - gr * (hi_t - lo_t), lo_t + gr * (hi_t - lo_t));
             if resid(m1) < resid(m2) {
                 hi_t = m2;
@@ -547,18 +571,38 @@ impl<const N: usize> ReversalDetector<N> {
     }
 }
 
-/// Least-squares parabola through samples lo..=hi (at least 3); returns (vertex time, points).
-fn fit_vertex(at: impl Fn(u64) -> f32, lo: u64, hi: u64) -> Option<(f32, u64)> {
+/// Time of sample i ≤ k relative to sample k (≤ 0), exact in f32 for any run length (the window
+/// is at most the ring long; absolute sample indices would lose sub-sample resolution in f32).
+#[inline(always)]
+fn rel(i: u64, k: u64) -> f32 {
+    -(k.saturating_sub(i) as u32 as f32)
+}
+
+/// Ring slot of sample i: a mask for power-of-two rings (a 64-bit modulo is a library call on
+/// the Cortex-M4F).
+#[inline(always)]
+fn slot<const N: usize>(i: u64) -> usize {
+    if N.is_power_of_two() {
+        (i as usize) & (N - 1)
+    } else {
+        (i % N as u64) as usize
+    }
+}
+
+/// Least-squares parabola through samples lo..=hi (at least 3); returns (vertex time relative to
+/// sample k, points).
+fn fit_vertex(at: impl Fn(u64) -> f32, lo: u64, hi: u64, k: u64) -> Option<(f32, u64)> {
     if hi < lo + 2 {
         return None;
     }
     let n = hi - lo + 1;
-    let c = (lo + hi) as f32 / 2.0;
+    // Times relative to sample k.
+    let c = (rel(lo, k) + rel(hi, k)) / 2.0;
     let y0 = at(lo);
     let (mut s0, mut s1, mut s2, mut s3, mut s4) = (0.0f32, 0.0f32, 0.0f32, 0.0f32, 0.0f32);
     let (mut sy, mut suy, mut su2y) = (0.0f32, 0.0f32, 0.0f32);
     for i in lo..=hi {
-        let u = i as f32 - c;
+        let u = rel(i, k) - c;
         let y = at(i) - y0;
         let u2 = u * u;
         s0 += 1.0;
