@@ -28,7 +28,7 @@ mod scene_board {
 
 #[cfg(feature = "bench")]
 use super::bench;
-use super::pipeline::{self, flags, EventSource, FrameOut, Pipeline, Sample, DISP, QUEUE_LEN};
+use super::pipeline::{self, flags, EventSource, Pipeline, Sample, DISP};
 use super::{model, scene, stack};
 use ads131m04::Ads131m04;
 use core::cell::RefCell;
@@ -46,12 +46,27 @@ use stm32f4xx_hal::timer::{CounterHz, Event, Flag};
 type AdcSpi = ExclusiveDevice<Spi<SPI1>, PB6<Output<PushPull>>, NoDelay>;
 type Adc = Ads131m04<AdcSpi>;
 
-/// Everything the sample interrupt owns.
+/// Raw samples buffered between the sample interrupt and the main loop (a heapless queue of N
+/// holds N − 1): the detector's fits at a stick take a few ms, during which the interrupt keeps
+/// acquiring.
+const RAW_QUEUE_LEN: usize = 64;
+
+/// What the interrupt queues: the channels and flags of one sample (20 bytes; the board has no
+/// log-provided reversals).
+#[derive(Clone, Copy)]
+struct RawSample {
+    channels: [f32; pipeline::CHANNELS],
+    flags: u8,
+}
+
+/// Everything the sample interrupt owns: it only acquires and queues; the main loop runs the
+/// detector and the estimator and streams the frames.
 struct SampleSide {
     adc: Adc,
     timer: CounterHz<TIM2>,
-    pipeline: Pipeline,
-    producer: Producer<'static, FrameOut>,
+    producer: Producer<'static, RawSample>,
+    /// A sample was dropped (queue full): flag the next one that gets through.
+    overrun: bool,
 }
 
 impl SampleSide {
@@ -162,10 +177,16 @@ pub fn run() -> ! {
     #[cfg(not(feature = "bench"))]
     let _ = cp;
 
-    let Some(queue) = cortex_m::singleton!(: Queue<FrameOut, QUEUE_LEN> = Queue::new()) else {
+    let Some(queue) = cortex_m::singleton!(: Queue<RawSample, RAW_QUEUE_LEN> = Queue::new()) else {
         halt()
     };
     let (producer, mut consumer) = queue.split();
+    // In static RAM (counted in the image's RAM figure), owned by the main loop.
+    let Some(pipeline) = cortex_m::singleton!(
+        : Pipeline = Pipeline::new(estimator, detector, EventSource::Detector)
+    ) else {
+        halt()
+    };
 
     let mut timer = dp.TIM2.counter_hz(&mut rcc);
     if timer.start(scene_board::TIMER_RATE_HZ.Hz()).is_err() {
@@ -176,8 +197,8 @@ pub fn run() -> ! {
     let Some(side) = cortex_m::singleton!(: SampleSide = SampleSide {
         adc,
         timer,
-        pipeline: Pipeline::new(estimator, detector, EventSource::Detector),
         producer,
+        overrun: false,
     }) else {
         halt()
     };
@@ -190,18 +211,20 @@ pub fn run() -> ! {
     let stats_every = scene_board::TIMER_RATE_HZ.saturating_mul(10).max(1);
     let mut streamed: u32 = 0;
     loop {
-        let n = pipeline::drain(&mut consumer);
+        let mut n: u32 = 0;
+        while let Some(raw) = consumer.dequeue() {
+            let sample = Sample {
+                channels: raw.channels,
+                flags: raw.flags,
+                reversal: None,
+            };
+            let frame = pipeline.step(&sample);
+            pipeline::emit(&frame);
+            n = n.wrapping_add(1);
+        }
         if n > 0 && streamed / stats_every != (streamed + n) / stats_every {
-            let stats = critical_section::with(|cs| {
-                SAMPLE_SIDE
-                    .borrow_ref(cs)
-                    .as_deref()
-                    .map(|s| (s.pipeline.stats, model::mu_estimate(s.pipeline.estimator())))
-            });
-            if let Some((s, mu)) = stats {
-                pipeline::emit_stats(&s);
-                model::emit_mu(mu);
-            }
+            pipeline::emit_stats(&pipeline.stats);
+            model::emit_mu(model::mu_estimate(pipeline.estimator()));
             stack::report(&painted);
         }
         streamed = streamed.wrapping_add(n);
@@ -215,7 +238,14 @@ fn TIM2() {
         if let Some(s) = SAMPLE_SIDE.borrow_ref_mut(cs).as_deref_mut() {
             s.timer.clear_flags(Flag::Update);
             let sample = s.acquire();
-            s.pipeline.produce(&sample, &mut s.producer);
+            let mut raw = RawSample {
+                channels: sample.channels,
+                flags: sample.flags,
+            };
+            if s.overrun {
+                raw.flags |= flags::OVERRUN;
+            }
+            s.overrun = s.producer.enqueue(raw).is_err();
         }
     });
 }

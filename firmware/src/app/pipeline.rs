@@ -40,6 +40,7 @@ pub const DISP: usize = 3;
 /// 10 kHz) of slack is plenty there and keeps its static RAM under 8 KiB with room for the
 /// detector's ring at high rates; the QEMU replay drains every 16 samples.
 #[cfg(feature = "board")]
+#[allow(dead_code)] // the board image queues raw samples instead (board.rs)
 pub const QUEUE_LEN: usize = 32;
 /// Capacity of the sample -> streaming queue (a heapless queue of N holds N - 1 frames).
 #[cfg(not(feature = "board"))]
@@ -197,6 +198,7 @@ pub struct Pipeline {
     detector: Detector,
     source: EventSource,
     index: u32,
+    #[cfg_attr(feature = "board", allow(dead_code))]
     overrun: bool,
     /// Counters.
     pub stats: Stats,
@@ -288,6 +290,7 @@ impl Pipeline {
 
     /// [`Self::step`], then queue the frame; a full queue drops it and flags the next frame
     /// that gets through with [`flags::OVERRUN`].
+    #[cfg_attr(feature = "board", allow(dead_code))]
     pub fn produce(&mut self, s: &Sample, producer: &mut Producer<'_, FrameOut>) {
         let mut frame = self.step(s);
         if self.overrun {
@@ -335,6 +338,7 @@ pub fn emit(f: &FrameOut) {
 }
 
 /// Stream every queued frame; returns how many.
+#[cfg_attr(feature = "board", allow(dead_code))]
 pub fn drain(consumer: &mut Consumer<'_, FrameOut>) -> u32 {
     let mut n: u32 = 0;
     while let Some(f) = consumer.dequeue() {
