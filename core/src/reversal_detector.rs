@@ -461,27 +461,8 @@ impl<const N: usize> ReversalDetector<N> {
             r
         };
         let (a, b) = (a.max(lo_f), b.min(0.0));
-        let (mut best, mut best_r) = (a, f32::INFINITY);
-        let mut t = a;
-        while t <= b {
-            let r = resid(t);
-            if r < best_r {
-                best_r = r;
-                best = t;
-            }
-            t += 1.0;
-        }
-        let (mut lo_t, mut hi_t) = ((best - 1.0).max(lo_f), (best + 1.0).min(0.0));
-        let gr = 0.618_034f32;
-        for _ in 0..14 {
-            let (m1, m2) = (hi_t - gr * (hi_t - lo_t), lo_t + gr * (hi_t - lo_t));
-            if resid(m1) < resid(m2) {
-                hi_t = m2;
-            } else {
-                lo_t = m1;
-            }
-        }
-        let te = 0.5 * (lo_t + hi_t);
+        let (best, _) = grid_min(&resid, (a, b), 1.0);
+        let te = golden_min(&resid, ((best - 1.0).max(lo_f), (best + 1.0).min(0.0)), 14);
         (te, resid(te))
     }
 
@@ -543,32 +524,43 @@ impl<const N: usize> ReversalDetector<N> {
         };
         // A coarse grid (every 3 samples; the residual is smooth in t_s), then golden-section
         // refinement over ±3 samples around its best point (`refine`).
-        let (mut best, mut best_r) = (a, f32::INFINITY);
-        let mut t = a;
-        while t <= b {
-            let r = resid(t);
-            if r < best_r {
-                best_r = r;
-                best = t;
-            }
-            t += 3.0;
-        }
+        let (best, best_r) = grid_min(&resid, (a, b), 3.0);
         if !refine {
             return (best, best_r);
         }
-        let (mut lo_t, mut hi_t) = (best - 3.0, best + 3.0);
-        let gr = 0.618_034f32;
-        for _ in 0..16 {
-            let (m1, m2) = (hi_t - gr * (hi_t - lo_t), lo_t + gr * (hi_t - lo_t));
-            if resid(m1) < resid(m2) {
-                hi_t = m2;
-            } else {
-                lo_t = m1;
-            }
-        }
-        let ts = 0.5 * (lo_t + hi_t);
+        let ts = golden_min(&resid, (best - 3.0, best + 3.0), 16);
         (ts, resid(ts))
     }
+}
+
+/// The best of f on the grid a, a + step, … ≤ b: (t, f(t)).
+fn grid_min(f: &impl Fn(f32) -> f32, (a, b): (f32, f32), step: f32) -> (f32, f32) {
+    let (mut best, mut best_r) = (a, f32::INFINITY);
+    let mut t = a;
+    while t <= b {
+        let r = f(t);
+        if r < best_r {
+            best_r = r;
+            best = t;
+        }
+        t += step;
+    }
+    (best, best_r)
+}
+
+/// Golden-section search for the minimum of f on [lo, hi] (`iters` steps): the midpoint of the
+/// final bracket.
+fn golden_min(f: &impl Fn(f32) -> f32, (mut lo, mut hi): (f32, f32), iters: u32) -> f32 {
+    let gr = 0.618_034f32;
+    for _ in 0..iters {
+        let (m1, m2) = (hi - gr * (hi - lo), lo + gr * (hi - lo));
+        if f(m1) < f(m2) {
+            hi = m2;
+        } else {
+            lo = m1;
+        }
+    }
+    0.5 * (lo + hi)
 }
 
 /// Time of sample i ≤ k relative to sample k (≤ 0), exact in f32 for any run length (the window

@@ -219,32 +219,6 @@ fn simulate_truth(s: &Structure, table: &TableMotion, mu_s: f64, duration: f64) 
         .map_err(|e| anyhow!("truth simulation: {e}"))
 }
 
-/// Upward zero crossing of the truth's friction F/F0 in [t0, t0 + period).
-fn friction_zero_crossing(truth: &Truth, t0: f64, period: f64) -> Option<f64> {
-    let f = |t: f64| truth.sample(t).map(|s| s.friction_level);
-    let n = 4000;
-    let h = period / n as f64;
-    let mut prev = f(t0)?;
-    for i in 1..=n {
-        let t = t0 + i as f64 * h;
-        let v = f(t)?;
-        if prev < 0.0 && v >= 0.0 {
-            let (mut lo, mut hi) = (t - h, t);
-            for _ in 0..80 {
-                let mid = 0.5 * (lo + hi);
-                if f(mid)? < 0.0 {
-                    lo = mid;
-                } else {
-                    hi = mid;
-                }
-            }
-            return Some(hi);
-        }
-        prev = v;
-    }
-    None
-}
-
 /// The three bench scenes.
 pub fn scenes(quick: bool) -> Result<Vec<BenchScene>> {
     let mut out = Vec::new();
@@ -266,7 +240,7 @@ pub fn scenes(quick: bool) -> Result<Vec<BenchScene>> {
     let mu_s = sc.static_friction_coefficient;
     let truth = simulate_truth(&sc.structure, &table, mu_s, sc.duration_s)?;
     let half = sc.samples / 2;
-    let origin = friction_zero_crossing(&truth, sc.time(half), period);
+    let origin = truth.friction_zero_crossing(sc.time(half), period);
     // The paper's train (continuous reciprocating sliding, reversals every T/2), phase-aligned
     // with the truth: the first reversal to +1 at the truth's upward friction zero crossing mod T.
     let first = origin.map_or(0.0, |t| t.rem_euclid(period));

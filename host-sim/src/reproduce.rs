@@ -351,32 +351,6 @@ fn table1_structure(g: f64) -> Result<Structure> {
     .map_err(|e| anyhow!("{e}"))
 }
 
-/// Upward zero crossing of the truth's friction F/F0 in [t0, t0 + period).
-fn friction_zero_crossing(truth: &Truth, t0: f64, period: f64) -> Option<f64> {
-    let f = |t: f64| truth.sample(t).map(|s| s.friction_level);
-    let n = 4000;
-    let h = period / n as f64;
-    let mut prev = f(t0)?;
-    for i in 1..=n {
-        let t = t0 + i as f64 * h;
-        let v = f(t)?;
-        if prev < 0.0 && v >= 0.0 {
-            let (mut lo, mut hi) = (t - h, t);
-            for _ in 0..80 {
-                let mid = 0.5 * (lo + hi);
-                if f(mid)? < 0.0 {
-                    lo = mid;
-                } else {
-                    hi = mid;
-                }
-            }
-            return Some(hi);
-        }
-        prev = v;
-    }
-    None
-}
-
 fn fig6(opts: &ReproduceOptions, path: &Path) -> Result<Fig6> {
     let s = table1_structure(PAPER_G)?;
     let (a0, period) = (2.0, 0.143);
@@ -403,7 +377,8 @@ fn fig6(opts: &ReproduceOptions, path: &Path) -> Result<Fig6> {
         initial_sign: 1.0,
     };
     let truth = truth_harmonic(&s, a0, period, t_a + 6.0 * period, s.mu())?;
-    let zc = friction_zero_crossing(&truth, t_a, period)
+    let zc = truth
+        .friction_zero_crossing(t_a, period)
         .ok_or_else(|| anyhow!("Fig. 6: no friction zero crossing in the truth"))?;
     let gal = |v: f64| v * 100.0;
     let tfm: Vec<(f64, f64)> = ts

@@ -1310,6 +1310,33 @@ impl Truth {
         t <= self.duration_s * (1.0 + 1e-12)
     }
 
+    /// The first upward zero crossing of the friction F/F0 in [t0, t0 + period) (a 4000-point scan,
+    /// then bisection to rounding), e.g. to phase a rectangular friction train with the truth.
+    pub fn friction_zero_crossing(&self, t0: f64, period: f64) -> Option<f64> {
+        let f = |t: f64| self.sample(t).map(|s| s.friction_level);
+        let n = 4000;
+        let h = period / n as f64;
+        let mut prev = f(t0)?;
+        for i in 1..=n {
+            let t = t0 + i as f64 * h;
+            let v = f(t)?;
+            if prev < 0.0 && v >= 0.0 {
+                let (mut lo, mut hi) = (t - h, t);
+                for _ in 0..80 {
+                    let mid = 0.5 * (lo + hi);
+                    if f(mid)? < 0.0 {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                }
+                return Some(hi);
+            }
+            prev = v;
+        }
+        None
+    }
+
     /// A cursor evaluating samples in O(1) for non-decreasing times (any order works).
     pub fn sampler(&self) -> Sampler<'_> {
         Sampler {
