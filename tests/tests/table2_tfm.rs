@@ -5,7 +5,7 @@ use ssvr_integration_tests::TABLE2;
 #[test]
 fn tfm_reproduces_table2_tfm_column() {
     for row in TABLE2 {
-        let s = row.structure();
+        let s = row.structure().expect("Table 2 parameters are valid");
         let tfm = Tfm::new(&s, row.a0_gal / 100.0, row.period_s).unwrap();
         let Tfm::Sliding { response, .. } = tfm else {
             panic!("test {} must slide", row.no)
