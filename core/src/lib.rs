@@ -10,6 +10,9 @@
 //! * [`duhamel_closed_form`]: the rectangular Duhamel method (RDM, eq 36) generalised to any train of
 //!   friction reversals.
 //! * [`duhamel_recursion`]: eq (36) as an exact O(1)-per-sample recursion (the estimator).
+//! * [`reversal_detector`] and [`phase_detector`]: friction reversals, sticks and slip starts sensed
+//!   from the slip displacement, or from the slip acceleration (base minus table accelerometer).
+//! * [`stick_slip_estimator`]: the stick-slip aware estimator with online friction identification.
 //! * [`duhamel_truncated`]: eq (36) truncated to the K newest reversals (O(K) per sample; a baseline).
 //!
 //! The library is `#![no_std]`, allocates nothing and never panics on any input: every fallible
@@ -31,6 +34,7 @@ pub mod error;
 pub mod fourier_series;
 pub mod free_vibration;
 pub mod math;
+pub mod phase_detector;
 pub mod reversal_detector;
 pub mod stick_slip_estimator;
 pub mod structure;

@@ -199,6 +199,11 @@ impl<const N: usize> ReversalDetector<N> {
         self.k
     }
 
+    /// The settings.
+    pub fn config(&self) -> &DetectorConfig {
+        &self.cfg
+    }
+
     fn at(&self, i: u64) -> f32 {
         self.ring[slot::<N>(i)]
     }
@@ -534,7 +539,7 @@ impl<const N: usize> ReversalDetector<N> {
 }
 
 /// The best of f on the grid a, a + step, … ≤ b: (t, f(t)).
-fn grid_min(f: &impl Fn(f32) -> f32, (a, b): (f32, f32), step: f32) -> (f32, f32) {
+pub(crate) fn grid_min(f: &impl Fn(f32) -> f32, (a, b): (f32, f32), step: f32) -> (f32, f32) {
     let (mut best, mut best_r) = (a, f32::INFINITY);
     let mut t = a;
     while t <= b {
@@ -550,7 +555,7 @@ fn grid_min(f: &impl Fn(f32) -> f32, (a, b): (f32, f32), step: f32) -> (f32, f32
 
 /// Golden-section search for the minimum of f on [lo, hi] (`iters` steps): the midpoint of the
 /// final bracket.
-fn golden_min(f: &impl Fn(f32) -> f32, (mut lo, mut hi): (f32, f32), iters: u32) -> f32 {
+pub(crate) fn golden_min(f: &impl Fn(f32) -> f32, (mut lo, mut hi): (f32, f32), iters: u32) -> f32 {
     let gr = 0.618_034f32;
     for _ in 0..iters {
         let (m1, m2) = (hi - gr * (hi - lo), lo + gr * (hi - lo));
@@ -566,14 +571,14 @@ fn golden_min(f: &impl Fn(f32) -> f32, (mut lo, mut hi): (f32, f32), iters: u32)
 /// Time of sample i ≤ k relative to sample k (≤ 0), exact in f32 for any run length (the window
 /// is at most the ring long; absolute sample indices would lose sub-sample resolution in f32).
 #[inline(always)]
-fn rel(i: u64, k: u64) -> f32 {
+pub(crate) fn rel(i: u64, k: u64) -> f32 {
     -(k.saturating_sub(i) as u32 as f32)
 }
 
 /// Ring slot of sample i: a mask for power-of-two rings (a 64-bit modulo is a library call on
 /// the Cortex-M4F).
 #[inline(always)]
-fn slot<const N: usize>(i: u64) -> usize {
+pub(crate) fn slot<const N: usize>(i: u64) -> usize {
     if N.is_power_of_two() {
         (i as usize) & (N - 1)
     } else {

@@ -13,9 +13,12 @@
 //! otherwise stick-slip. The firmware compiles in one model (`SSVR_MODEL`, [`Model::name`]) with
 //! the same settings; `host-sim qemu` chooses it the same way.
 
+use crate::sensors::{SensorFrame, FLAG_ACCEL_SATURATED};
 use crate::truth::{EventKind, Truth};
 use ssvr_core::duhamel_recursion::Estimator32;
 use ssvr_core::math::F32Poly;
+use ssvr_core::phase_detector::{PhaseDetector, PhaseDetectorConfig};
+use ssvr_core::reversal_detector::{DetectorConfig, ReversalDetector, SlipEvent};
 use ssvr_core::stick_slip_estimator::{MuEstimate, StickSlipConfig, StickSlipEstimator};
 use ssvr_core::{Error, Structure};
 
@@ -189,6 +192,93 @@ impl ModelEstimator {
         match self {
             ModelEstimator::Rectangular { .. } => None,
             ModelEstimator::StickSlip { est, .. } => est.mu_estimate(),
+        }
+    }
+}
+
+/// Ring of the slip-acceleration detector (power of two ≥ its fit window of 38 samples).
+pub const PHASE_DETECTOR_RING: usize = 64;
+
+/// Ring of the slip-displacement detector (≥ 2·fit_half + 2 = 130 at any rate; holds a stick's
+/// fit window at 10 kHz).
+pub const DISPLACEMENT_DETECTOR_RING: usize = 256;
+
+/// Which detector a model uses ([`Detector::for_model`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum DetectorKind {
+    /// [`ReversalDetector`] on the base-to-table displacement (rectangular, fixed-base).
+    SlipDisplacement,
+    /// [`PhaseDetector`] on the slip acceleration, base minus table accelerometer
+    /// (stick-slip: its stick and slip start times must be right to a fraction of a sample).
+    SlipAcceleration,
+}
+
+/// The friction-event detector of a run (the firmware compiles in the same per model).
+#[derive(Debug, Clone)]
+pub enum Detector {
+    /// On the displacement.
+    Displacement(Box<ReversalDetector<DISPLACEMENT_DETECTOR_RING>>),
+    /// On the slip acceleration.
+    Acceleration(Box<PhaseDetector<PHASE_DETECTOR_RING>>),
+}
+
+impl Detector {
+    /// The detector kind of a model.
+    pub fn kind_for(model: Model) -> DetectorKind {
+        match model {
+            Model::StickSlip => DetectorKind::SlipAcceleration,
+            Model::FixedBase | Model::Rectangular => DetectorKind::SlipDisplacement,
+        }
+    }
+
+    /// The detector of `model` for a scene's sensors, sample rate and friction.
+    pub fn for_model(
+        model: Model,
+        sensors: &crate::scene::Sensors,
+        rate_hz: f64,
+        (mu_static, mu): (f64, f64),
+    ) -> Result<Self, Error> {
+        Ok(match Self::kind_for(model) {
+            DetectorKind::SlipDisplacement => {
+                let cfg = DetectorConfig::for_noise(sensors.disp_noise_rms_m, rate_hz)?
+                    .with_friction(mu_static, mu);
+                Detector::Displacement(Box::new(ReversalDetector::new(cfg)?))
+            }
+            DetectorKind::SlipAcceleration => {
+                let cfg = PhaseDetectorConfig::for_noise(sensors.accel_noise_rms_m_s2)?
+                    .with_friction(mu_static, mu);
+                Detector::Acceleration(Box::new(PhaseDetector::new(cfg)?))
+            }
+        })
+    }
+
+    /// Its kind.
+    pub fn kind(&self) -> DetectorKind {
+        match self {
+            Detector::Displacement(_) => DetectorKind::SlipDisplacement,
+            Detector::Acceleration(_) => DetectorKind::SlipAcceleration,
+        }
+    }
+
+    /// Process one measured frame: the displacement, or the base minus table acceleration (NaN
+    /// when an accelerometer saturated: the detector repeats its last value).
+    pub fn process(&mut self, f: &SensorFrame) -> Option<SlipEvent> {
+        match self {
+            Detector::Displacement(d) => d.process(f.disp_m),
+            Detector::Acceleration(d) => d.process(if f.flags & FLAG_ACCEL_SATURATED != 0 {
+                f32::NAN
+            } else {
+                f.base_accel_m_s2 - f.table_accel_m_s2
+            }),
+        }
+    }
+
+    /// The longest back-dating of its events (samples).
+    pub fn max_age_samples(&self) -> usize {
+        match self {
+            Detector::Displacement(d) => d.config().max_age_samples(DISPLACEMENT_DETECTOR_RING),
+            Detector::Acceleration(d) => d.config().max_age_samples(),
         }
     }
 }

@@ -4,9 +4,13 @@
 //!
 //! 1. the exact stick-slip truth ([`crate::truth`]) at t_k,
 //! 2. the sensors ([`crate::sensors`]: seeded noise, ADC, saturation) measure it,
-//! 3. the reversal detector ([`ReversalDetector`], ring of [`DETECTOR_RING`] samples, configured by
-//!    [`DetectorConfig::for_noise`] from the scene's displacement noise and rate) processes the
-//!    measured base-to-table displacement,
+//! 3. the model's friction-event detector ([`model::Detector`]) processes the measurement: for the
+//!    rectangular and fixed-base models the reversal detector (`ReversalDetector`, configured by
+//!    `DetectorConfig::for_noise` from the scene's displacement noise and rate) on the measured
+//!    base-to-table displacement; for the stick-slip model the phase detector (`PhaseDetector`,
+//!    `PhaseDetectorConfig::for_noise` from the accelerometer noise) on the measured slip
+//!    acceleration, base minus table accelerometer, whose sticks and slip starts it times to a
+//!    fraction of a sample,
 //! 4. a detected slip start or reversal is pushed into the firmware's estimator ([`Estimator32`]: f32,
 //!    the same code as the firmware) with its friction level and back-dated age,
 //!    `push_reversal(event.friction_level(), event.age_samples())`, before the `update()` that
@@ -39,7 +43,7 @@ use crate::truth::{simulate, EventKind, Phase, TruthInput};
 use anyhow::{anyhow, bail, Context, Result};
 use serde::Serialize;
 use ssvr_core::duhamel_recursion::Estimator32;
-use ssvr_core::reversal_detector::{DetectorConfig, ReversalDetector, SlipEvent};
+use ssvr_core::reversal_detector::SlipEvent;
 use std::fmt;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -60,9 +64,6 @@ use std::sync::atomic::{AtomicBool, Ordering};
 ///   (`slip_start`, `reversal`, `stick` or empty), `event_age_samples` (the detector's
 ///   back-dating, empty without an event), `flags` (the sensor `FLAG_*` bits).
 pub const CSV_HEADER: &str = "t_s,table_accel_m_s2,base_accel_m_s2,measured_top_accel_m_s2,rel_disp_m,reversal,predicted_top_accel_m_s2,truth_top_accel_m_s2,ideal_predicted_top_accel_m_s2,truth_slip_m,truth_slip_dir,detected_event,event_age_samples,flags";
-
-/// Ring-buffer length of the reversal detector (≥ 2·fit_half + 2 = 130 at any rate).
-pub const DETECTOR_RING: usize = 256;
 
 /// The CSV is flushed every this many rows (an interrupted run keeps what was produced).
 pub const FLUSH_EVERY_ROWS: u64 = 4096;
@@ -285,14 +286,53 @@ pub struct RunReport {
 /// The detector's settings in a report.
 #[derive(Debug, Clone, Serialize)]
 pub struct DetectorReport {
+    /// Which detector the model uses: `slip-displacement` or `slip-acceleration`.
+    pub kind: model::DetectorKind,
     /// Ring length N.
     pub ring: usize,
-    /// Hysteresis (m).
-    pub hysteresis_m: f64,
-    /// Fit half-width (samples).
-    pub fit_half: usize,
-    /// Samples to declare a stick.
-    pub stick_samples: usize,
+    /// The longest back-dating of its events (samples).
+    pub max_age_samples: usize,
+    /// Displacement detector: hysteresis (m).
+    pub hysteresis_m: Option<f64>,
+    /// Displacement detector: fit half-width (samples).
+    pub fit_half: Option<usize>,
+    /// Displacement detector: samples to declare a stick.
+    pub stick_samples: Option<usize>,
+    /// Acceleration detector: |base − table acceleration| threshold (m/s²).
+    pub threshold_m_s2: Option<f64>,
+    /// Acceleration detector: samples of |s̈| below the threshold to declare a stick without a jump.
+    pub stall_samples: Option<usize>,
+}
+
+impl DetectorReport {
+    fn of(d: &model::Detector) -> Self {
+        let mut r = Self {
+            kind: d.kind(),
+            ring: 0,
+            max_age_samples: d.max_age_samples(),
+            hysteresis_m: None,
+            fit_half: None,
+            stick_samples: None,
+            threshold_m_s2: None,
+            stall_samples: None,
+        };
+        match d {
+            model::Detector::Displacement(x) => {
+                let c = x.config();
+                r.ring = model::DISPLACEMENT_DETECTOR_RING;
+                r.hysteresis_m = Some(c.hysteresis_m as f64);
+                r.fit_half = Some(c.fit_half);
+                r.stick_samples = Some(c.stick_samples);
+            }
+            model::Detector::Acceleration(x) => {
+                let c = x.config();
+                r.ring = model::PHASE_DETECTOR_RING;
+                r.threshold_m_s2 = Some(c.threshold_m_s2 as f64);
+                r.stall_samples = Some(c.stall_samples);
+            }
+        }
+        r
+    }
 }
 
 /// A slip start or reversal, detected or true.
@@ -534,15 +574,18 @@ pub fn run<W: Write>(
         .with_static_friction(scene.static_friction_coefficient);
     let truth =
         simulate(&input).map_err(|e| anyhow!("{label}: the truth simulation failed: {e}"))?;
-    let cfg = DetectorConfig::for_noise(scene.sensors.disp_noise_rms_m, rate)
-        .map_err(|e| anyhow!("{label}: detector configuration: {e}"))?
-        .with_friction(scene.static_friction_coefficient, structure.mu());
-    let mut detector = ReversalDetector::<DETECTOR_RING>::new(cfg)
-        .map_err(|e| anyhow!("{label}: detector: {e}"))?;
+
     let (model, model_reason) = match opts.model {
         Some(m) => (m, "chosen with --model".to_string()),
         None => model::choose(&truth, scene.duration_s),
     };
+    let mut detector = model::Detector::for_model(
+        model,
+        &scene.sensors,
+        rate,
+        (scene.static_friction_coefficient, structure.mu()),
+    )
+    .map_err(|e| anyhow!("{label}: detector: {e}"))?;
     let zero_at_stick = opts.on_stick == StickPolicy::Zero;
     let mut est = ModelEstimator::new(model, structure, rate, zero_at_stick)
         .map_err(|e| anyhow!("{label}: estimator: {e}"))?;
@@ -582,7 +625,7 @@ pub fn run<W: Write>(
     let mut rect_err = ErrStats::default();
     // Revised predictions: each sample once every event that can reach back to it is known (the
     // detector's stick window plus its fits), compared with the truth kept for that long.
-    let revision_delay = (cfg.stick_samples + 4 * cfg.fit_half + 8) as u64;
+    let revision_delay = (detector.max_age_samples() + 8) as u64;
     let mut rev_err = ErrStats::default();
     let mut truth_ring: std::collections::VecDeque<f64> = std::collections::VecDeque::new();
     let mut ideal_err = ErrStats::default();
@@ -611,7 +654,7 @@ pub fn run<W: Write>(
             let f = sensors.measure(k, &s);
 
             // The detector on the measured slip; its slip starts and reversals go to the estimator.
-            let event = detector.process(f.disp_m);
+            let event = detector.process(&f);
             let mut pushed = 0i32;
             if let Some(e) = event {
                 let age = e.age_samples();
@@ -800,12 +843,7 @@ pub fn run<W: Write>(
         rate_hz: rate,
         duration_s: scene.duration_s,
         out: opts.out_name.clone(),
-        detector: DetectorReport {
-            ring: DETECTOR_RING,
-            hysteresis_m: cfg.hysteresis_m as f64,
-            fit_half: cfg.fit_half,
-            stick_samples: cfg.stick_samples,
-        },
+        detector: DetectorReport::of(&detector),
         truth: truth_stats,
         estimator,
         detection,
@@ -968,10 +1006,14 @@ pub fn summary_text(r: &RunReport) -> String {
          top accelerometer: max |error| {:.4} m/s²\n",
         e.ideal_max_err_m_s2, e.ideal_rms_err_m_s2, e.measured_max_err_m_s2
     );
+    let how = match (r.detector.hysteresis_m, r.detector.threshold_m_s2) {
+        (Some(h), _) => format!("slip displacement, hysteresis {:.1} µm", 1e6 * h),
+        (_, Some(a)) => format!("slip acceleration, threshold {a:.3} m/s²"),
+        _ => String::new(),
+    };
     s += &format!(
-        "  detection (hysteresis {:.1} µm, ring {}): slip starts + reversals {} detected, {} true; \
+        "  detection ({how}, ring {}): slip starts + reversals {} detected, {} true; \
          {} matched, {} missed, {} false (±{} ms); sticks {} detected, {} true\n",
-        1e6 * r.detector.hysteresis_m,
         r.detector.ring,
         e.reversals_detected,
         e.reversals_true,

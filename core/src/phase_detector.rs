@@ -1,0 +1,480 @@
+//! Sensing the contact phase (slip start, reversal, stick) from the measured slip acceleration:
+//! the base accelerometer minus the table accelerometer, s̈ = ü2 − üg.
+//!
+//! The friction makes s̈ change sharply at every phase change, far above accelerometer noise:
+//! with F the friction on the base and F_stick = m1·ü1 + m2·üg the force that keeps it stuck,
+//! m2·s̈ = F − F_stick while sliding and s̈ = 0 while stuck. So
+//!
+//! * a **stick** is where the slip velocity v = ∫s̈ returns to zero and s̈ drops to zero (from a
+//!   deceleration of order μ(m1 + m2)g/m2);
+//! * a **reversal** is where v crosses zero and s̈ stays away from zero (F jumps by 2μ(m1+m2)g);
+//! * a **slip start** is where s̈ leaves zero: a ramp S·(t − t_b) when static and kinetic friction
+//!   are equal (F_stick crosses μ(m1+m2)g; or (t − t_b)² when it touches it), a jump plus a ramp
+//!   when static friction exceeds kinetic.
+//!
+//! The slip velocity is integrated (trapezoid) from the last event, where it is known to be zero,
+//! so integration noise does not accumulate across events: its error after n samples is about
+//! σ·Δt·√n. A zero of v is located inside its sample interval from the pre-event acceleration
+//! (extrapolated linearly); a slip start by a least-squares fit of the ramp (or jump) model to the
+//! samples around the first one above the threshold, on a one-sample grid of trial times refined
+//! by golden-section search. Times are relative to the current sample (exact for any run length).
+//! Events are reported late (a stick or a reversal one sample, a slip start `confirm_samples`)
+//! with their age in samples, which the estimator back-dates. Fixed-size ring of `N` samples; no
+//! heap, no panics.
+//!
+//! Compared with the displacement detector ([`crate::reversal_detector`]), which must wait for the
+//! slip to move by several times the displacement noise (a slow breakaway stays below 1 µm for
+//! milliseconds), this one needs accelerometers on the base and the table.
+
+use crate::error::{check, Error, Param};
+use crate::reversal_detector::{golden_min, grid_min, rel, slot, SlipEvent};
+
+/// A jump of s̈ (against its linear extrapolation) larger than this many thresholds is a change
+/// of the friction force.
+const JUMP_THRESHOLDS: f32 = 3.0;
+
+/// The stall rule's velocity bound: this many times `stall_samples` × threshold (m/s² × samples).
+const STALL_VELOCITY: f32 = 8.0;
+
+/// … plus this many times the magnitude of s̈'s last second difference.
+const CURVATURES: f32 = 4.0;
+
+/// Detector settings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PhaseDetectorConfig {
+    /// |s̈| above which the base slides (m/s²): a few times the slip acceleration's noise RMS.
+    pub threshold_m_s2: f32,
+    /// Samples from the first one above the threshold to the slip start's report (its fit).
+    pub confirm_samples: usize,
+    /// Samples before the first one above the threshold searched for the slip start.
+    pub search_samples: usize,
+    /// Samples of |s̈| below the threshold after which a sliding base is declared stuck even
+    /// without a jump of s̈ (when the integrated velocity is about zero too).
+    pub stall_samples: usize,
+    /// Breakaway shape: static friction above kinetic makes s̈ jump at a slip start (then the
+    /// time is known to the sample interval only); equal ones make it ramp up from zero.
+    pub jump_breakaway: bool,
+}
+
+impl PhaseDetectorConfig {
+    /// Defaults for the noise RMS of each accelerometer (base and table, m/s²): a threshold of 6σ
+    /// of their difference (σ·√2; at least 1 mm/s²), slip starts confirmed over 4 samples and
+    /// searched up to 32 samples before the first one above the threshold.
+    pub fn for_noise(accel_noise_rms_m_s2: f64) -> Result<Self, Error> {
+        check(
+            Param::EventTime,
+            accel_noise_rms_m_s2,
+            accel_noise_rms_m_s2 >= 0.0,
+            ">= 0 m/s²",
+        )?;
+        Ok(Self {
+            threshold_m_s2: (6.0 * libm::sqrt(2.0) * accel_noise_rms_m_s2).max(1e-3) as f32,
+            confirm_samples: 4,
+            search_samples: 32,
+            stall_samples: 10,
+            jump_breakaway: false,
+        })
+    }
+
+    /// The breakaway shape for static and kinetic friction coefficients (a jump when μs > μ).
+    pub fn with_friction(mut self, mu_static: f64, mu_kinetic: f64) -> Self {
+        self.jump_breakaway = mu_static > mu_kinetic;
+        self
+    }
+
+    /// The ring the detector needs (a power of two holding the slip start's fit window).
+    pub fn min_ring(&self) -> usize {
+        (self.search_samples + self.confirm_samples + 2).next_power_of_two()
+    }
+
+    /// The oldest event this detector reports (samples): a slip start's search window.
+    pub fn max_age_samples(&self) -> usize {
+        self.search_samples + self.confirm_samples + 1
+    }
+}
+
+/// The phase detector with a ring of `N` samples of slip acceleration.
+#[derive(Debug, Clone)]
+pub struct PhaseDetector<const N: usize> {
+    cfg: PhaseDetectorConfig,
+    ring: [f32; N],
+    /// Index of the next sample (samples seen so far).
+    k: u64,
+    /// Slip direction: +1, −1, or 0 while stuck.
+    direction: i8,
+    /// Slip velocity at the last sample (m/s² × samples), while sliding.
+    v: f32,
+    /// The integrated velocity was found off and is held at zero until the next event.
+    v_held: bool,
+    /// Consecutive samples with |s̈| below the threshold (while sliding).
+    in_band: usize,
+    /// While stuck: the first sample above the threshold (a slip start being confirmed).
+    pending: Option<u64>,
+    /// The last stick: the first stuck sample and the stick's age at it (samples).
+    stick_at: (u64, f32),
+}
+
+impl<const N: usize> PhaseDetector<N> {
+    /// A detector that starts stuck.
+    pub fn new(cfg: PhaseDetectorConfig) -> Result<Self, Error> {
+        check(
+            Param::EventTime,
+            cfg.threshold_m_s2 as f64,
+            cfg.threshold_m_s2 > 0.0,
+            "threshold > 0 m/s²",
+        )?;
+        if cfg.confirm_samples < 2 || cfg.stall_samples < 2 || cfg.min_ring() > N {
+            return Err(Error::OutOfRange {
+                param: Param::EventTime,
+                value: cfg.confirm_samples as f64,
+                expected: "confirm_samples >= 2, stall_samples >= 2, search + confirm samples + 2 <= buffer length",
+            });
+        }
+        Ok(Self {
+            cfg,
+            ring: [0.0; N],
+            k: 0,
+            direction: 0,
+            v: 0.0,
+            v_held: false,
+            in_band: 0,
+            pending: None,
+            stick_at: (0, 0.0),
+        })
+    }
+
+    /// The current slip direction (+1, −1, 0 stuck).
+    pub fn direction(&self) -> i8 {
+        self.direction
+    }
+
+    /// Samples processed.
+    pub fn samples(&self) -> u64 {
+        self.k
+    }
+
+    /// The settings.
+    pub fn config(&self) -> &PhaseDetectorConfig {
+        &self.cfg
+    }
+
+    fn at(&self, i: u64) -> f32 {
+        self.ring[slot::<N>(i)]
+    }
+
+    /// Process one sample of the slip acceleration, base minus table accelerometer (m/s²). A
+    /// non-finite sample repeats the previous one.
+    pub fn process(&mut self, slip_accel: f32) -> Option<SlipEvent> {
+        let k = self.k;
+        let a = if slip_accel.is_finite() {
+            slip_accel
+        } else if k > 0 {
+            self.at(k - 1)
+        } else {
+            0.0
+        };
+        self.ring[slot::<N>(k)] = a;
+        self.k += 1;
+        if k < 3 {
+            return None;
+        }
+        if self.direction == 0 {
+            self.stuck(k, a)
+        } else {
+            self.sliding(k, a)
+        }
+    }
+
+    /// A sliding sample: integrate the slip velocity; a stick or a reversal where s̈ jumps (the
+    /// friction force changes at once) or, for a gentle stop, where v returns to zero.
+    fn sliding(&mut self, k: u64, a: f32) -> Option<SlipEvent> {
+        let d = self.direction as f32;
+        let (a1, a2) = (self.at(k - 1), self.at(k - 2));
+        // The pre-event acceleration over (k − 1, k]: a1 + b·τ (τ in samples from k − 1).
+        let b = a1 - a2;
+        let thr = self.cfg.threshold_m_s2;
+        // While sliding s̈ is continuous; the friction force can only jump towards the sliding
+        // direction (a stick or a reversal ends a deceleration).
+        // Judged against the signal's own curvature (its last second difference): coarse
+        // sampling of a fast s̈ misses its linear extrapolation by that much without any event.
+        let curv = libm::fabsf(b - (a2 - self.at(k - 3)));
+        let jump = d * (a - (a1 + b)) > JUMP_THRESHOLDS * thr + CURVATURES * curv;
+        let v_end = self.v + a1 + 0.5 * b;
+        let crossed = d * v_end <= 0.0;
+        let stuck = libm::fabsf(a) < thr;
+        self.in_band = if stuck {
+            self.in_band.saturating_add(1)
+        } else {
+            0
+        };
+        let m = self.cfg.stall_samples;
+        if self.in_band >= m
+            && (self.v_held || libm::fabsf(self.v) <= STALL_VELOCITY * m as f32 * thr)
+        {
+            // s̈ has stayed at zero for `stall_samples` with no jump seen (a stick too gentle or
+            // too noisy for one), and the velocity is about zero: the base sticks, since the
+            // first sample of the run.
+            // (Capped at the longest back-dating the detector promises.)
+            let n = self.in_band.min(self.cfg.max_age_samples());
+            let age = (n - 1) as f32 + 0.5;
+            self.direction = 0;
+            self.v = 0.0;
+            self.v_held = false;
+            self.pending = None;
+            self.in_band = 0;
+            self.stick_at = (k + 1 - n as u64, 0.5);
+            return Some(SlipEvent::Stick { age_samples: age });
+        }
+        // A gentle stop (s̈ → 0 as v → 0, no jump) is only seen through v, when v is trusted.
+        if !jump && !(crossed && stuck && !self.v_held) {
+            if crossed {
+                // v reached zero but s̈ shows no event: the integrated velocity is off (by the
+                // jump at the slip start, known to a sample only). Hold it at zero.
+                self.v = 0.0;
+                self.v_held = true;
+            } else {
+                self.v += 0.5 * (a1 + a);
+            }
+            return None;
+        }
+        let tau = if self.v_held {
+            0.5
+        } else {
+            // v(τ) = v + a1·τ + b·τ²/2 = 0: the linear root, then a Newton step; an
+            // integrated velocity that puts the zero outside the interval of the jump is off:
+            // the middle of the interval.
+            let mut tau = if a1 != 0.0 { -self.v / a1 } else { 0.5 };
+            let dv = a1 + b * tau;
+            if dv != 0.0 {
+                tau -= (self.v + a1 * tau + 0.5 * b * tau * tau) / dv;
+            }
+            if (0.0..=1.0).contains(&tau) {
+                tau
+            } else if jump {
+                0.5
+            } else {
+                tau.clamp(0.0, 1.0)
+            }
+        };
+        let age = 1.0 - tau;
+        self.v_held = false;
+        if stuck {
+            // s̈ dropped to zero: the base sticks.
+            self.direction = 0;
+            self.v = 0.0;
+            self.pending = None;
+            self.stick_at = (k, age);
+            self.in_band = 0;
+            return Some(SlipEvent::Stick { age_samples: age });
+        }
+        if d * a < 0.0 {
+            // s̈ jumped but stays away from zero against the old direction: a reversal. The
+            // velocity since it, with the post-event acceleration (slope b too).
+            let direction = -self.direction;
+            self.direction = direction;
+            self.v = a * age - 0.5 * b * age * age;
+            return Some(SlipEvent::Reversal {
+                direction,
+                age_samples: age,
+            });
+        }
+        // A jump to acceleration in the sliding direction is not a friction change (noise).
+        self.v += 0.5 * (a1 + a);
+        None
+    }
+
+    /// A stuck sample: watch for s̈ leaving zero; confirm and time the slip start.
+    fn stuck(&mut self, k: u64, a: f32) -> Option<SlipEvent> {
+        let thr = self.cfg.threshold_m_s2;
+        let Some(p) = self.pending else {
+            if libm::fabsf(a) >= thr {
+                self.pending = Some(k);
+                if self.cfg.confirm_samples <= 1 {
+                    return self.slip_start(k, k);
+                }
+            }
+            return None;
+        };
+        // A noise spike: the samples after it must keep its sign, at least half the threshold.
+        let s = if self.at(p) > 0.0 { 1.0 } else { -1.0 };
+        if s * a < 0.5 * thr {
+            self.pending = None;
+            if libm::fabsf(a) >= thr {
+                self.pending = Some(k);
+            }
+            return None;
+        }
+        if k - p + 1 < self.cfg.confirm_samples as u64 {
+            return None;
+        }
+        self.slip_start(p, k)
+    }
+
+    /// Time the slip start whose first sample above the threshold is `p`; the current sample is
+    /// `k`. Least squares over the samples lo..=k for the trial start t_b (relative to k).
+    fn slip_start(&mut self, p: u64, k: u64) -> Option<SlipEvent> {
+        self.pending = None;
+        let s: i8 = if self.at(p) > 0.0 { 1 } else { -1 };
+        let (stick_k, stick_age) = self.stick_at;
+        let lo = p
+            .saturating_sub(self.cfg.search_samples as u64)
+            .max(k.saturating_sub(N as u64 - 1))
+            .max(stick_k.saturating_sub(1));
+        // The earliest start: the stick before it, or the window's first sample.
+        let t_min = if stick_k >= lo && stick_k <= k {
+            rel(stick_k, k) - stick_age
+        } else {
+            rel(lo, k)
+        };
+        let t_max = rel(p, k);
+        let a = |i: u64| self.at(i);
+        let tb = if self.cfg.jump_breakaway {
+            // s̈ = (J + S·u)·[u > 0], u = t − t_b: the residual is constant between samples, so
+            // t_b is the middle of the best sample interval.
+            let resid = |tb: f32| {
+                let (mut n, mut su, mut suu, mut sa, mut sua) = (0.0f32, 0.0, 0.0, 0.0, 0.0);
+                for i in lo..=k {
+                    let u = rel(i, k) - tb;
+                    if u > 0.0 {
+                        let y = a(i);
+                        n += 1.0;
+                        su += u;
+                        suu += u * u;
+                        sa += y;
+                        sua += u * y;
+                    }
+                }
+                let det = n * suu - su * su;
+                if !(det > 0.0) {
+                    return f32::INFINITY;
+                }
+                // −(explained sum of squares): bᵀA⁻¹b.
+                -((suu * sa * sa - 2.0 * su * sa * sua + n * sua * sua) / det)
+            };
+            let first = libm::floorf(t_min) + 0.5;
+            let (best, _) = grid_min(&resid, (first, t_max), 1.0);
+            best.clamp(t_min, t_max)
+        } else {
+            // s̈ = S·u^q·[u > 0], q = 1 (a linear crossing) or 2 (a tangent one).
+            let resid_q = |tb: f32, q: i32| {
+                let (mut sgg, mut sga) = (0.0f32, 0.0f32);
+                for i in lo..=k {
+                    let u = rel(i, k) - tb;
+                    if u > 0.0 {
+                        let g = if q == 1 { u } else { u * u };
+                        sgg += g * g;
+                        sga += g * a(i);
+                    }
+                }
+                if !(sgg > 0.0) {
+                    return f32::INFINITY;
+                }
+                -(sga * sga / sgg)
+            };
+            let mut best = (t_max, f32::INFINITY);
+            for q in [1, 2] {
+                let f = |tb: f32| resid_q(tb, q);
+                let (g, _) = grid_min(&f, (t_min, t_max), 1.0);
+                let t = golden_min(&f, ((g - 1.0).max(t_min), (g + 1.0).min(t_max)), 14);
+                let r = f(t);
+                if r < best.1 {
+                    best = (t, r);
+                }
+            }
+            best.0
+        };
+        // Slip velocity at k since t_b: the piece up to the first sample after it (from zero,
+        // or from the jump), then trapezoids.
+        let j0 = k - (libm::floorf(-tb).max(0.0) as u64).min(k - lo);
+        let first = rel(j0, k) - tb;
+        let mut v = if self.cfg.jump_breakaway { 1.0 } else { 0.5 } * a(j0) * first.max(0.0);
+        let mut i = j0;
+        while i < k {
+            v += 0.5 * (a(i) + a(i + 1));
+            i += 1;
+        }
+        self.v = v;
+        self.v_held = false;
+        self.in_band = 0;
+        self.direction = s;
+        Some(SlipEvent::SlipStart {
+            direction: s,
+            age_samples: (-tb).max(0.0),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Run the detector over s̈(t) (samples); the events with their times.
+    fn detect(
+        cfg: PhaseDetectorConfig,
+        n: u64,
+        a: impl Fn(f64) -> f64,
+    ) -> std::vec::Vec<(f64, SlipEvent)> {
+        let mut d = PhaseDetector::<64>::new(cfg).unwrap();
+        let mut events = std::vec::Vec::new();
+        for k in 0..n {
+            let t = k as f64;
+            if let Some(e) = d.process(a(t) as f32) {
+                events.push((t - e.age_samples() as f64, e));
+            }
+        }
+        events
+    }
+
+    #[test]
+    fn times_a_ramp_breakaway_and_a_stick_sub_sample() {
+        // From t_b, s̈ = S·u − C·u² (u = t − t_b, continuous: equal static and kinetic friction):
+        // v = S·u²/2 − C·u³/3 is zero again at u_s = 3S/(2C), where s̈ = −3S²/(4C) drops to 0.
+        let (tb, s, us) = (100.3, 0.5, 53.45);
+        let c = 3.0 * s / (2.0 * us);
+        let cfg = PhaseDetectorConfig::for_noise(0.0).unwrap();
+        let events = detect(cfg, 400, |t| {
+            let u = t - tb;
+            if u <= 0.0 || u > us {
+                0.0
+            } else {
+                s * u - c * u * u
+            }
+        });
+        assert_eq!(events.len(), 2, "{events:?}");
+        assert!(matches!(
+            events[0].1,
+            SlipEvent::SlipStart { direction: 1, .. }
+        ));
+        assert!((events[0].0 - tb).abs() < 0.15, "{events:?}");
+        assert!(matches!(events[1].1, SlipEvent::Stick { .. }));
+        assert!((events[1].0 - (tb + us)).abs() < 0.02, "{events:?}");
+    }
+
+    #[test]
+    fn a_reversal_keeps_sliding() {
+        // A jump start at t_b (static friction above kinetic): s̈ = J − C·u², v = J·u − C·u³/3, zero
+        // at u_r = √(3J/C) where s̈ = −2J; the friction flips and s̈ jumps by +J: sliding back.
+        let (tb, j, ur) = (50.5, 2.0, 33.3);
+        let c = 3.0 * j / (ur * ur);
+        let cfg = PhaseDetectorConfig::for_noise(0.0)
+            .unwrap()
+            .with_friction(0.25, 0.2);
+        let events = detect(cfg, 100, |t| {
+            let u = t - tb;
+            if u <= 0.0 {
+                0.0
+            } else if u <= ur {
+                j - c * u * u
+            } else {
+                j - c * u * u + j
+            }
+        });
+        assert_eq!(events.len(), 2, "{events:?}");
+        assert!((events[0].0 - tb).abs() <= 0.5, "{events:?}");
+        assert!(matches!(
+            events[1].1,
+            SlipEvent::Reversal { direction: -1, .. }
+        ));
+        assert!((events[1].0 - (tb + ur)).abs() < 0.02, "{events:?}");
+    }
+}
