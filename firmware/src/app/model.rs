@@ -23,12 +23,18 @@ pub const NAME: &str = scene::MODEL;
 /// The estimator of the model.
 #[cfg(ssvr_model = "rectangular")]
 pub type Estimator = ssvr_core::duhamel_recursion::Estimator32;
-/// The estimator of the model.
+/// The estimator of the model: a history of `scene::HISTORY` samples in the storage that makes
+/// its steady state cheapest (`storage_for`: a multiple of the identification block plus one).
 #[cfg(not(ssvr_model = "rectangular"))]
 pub type Estimator = ssvr_core::stick_slip_estimator::StickSlipEstimator<
     f32,
     ssvr_core::math::F32Poly,
-    { scene::HISTORY },
+    {
+        ssvr_core::stick_slip_estimator::storage_for(
+            scene::HISTORY,
+            scene::STICK_SLIP.identify_every,
+        )
+    },
 >;
 
 /// The largest event age pushed (samples); older events are clamped to it.
