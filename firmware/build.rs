@@ -7,16 +7,19 @@
 //! * Both images: reads the scene TOML named by `SSVR_SCENE` (relative to `firmware/`; default
 //!   `../host-sim/scenes/table1.toml` for the QEMU image, `scenes/board.toml` for the board) and
 //!   generates `OUT_DIR/scene.rs`: structure parameters, sample rate, displacement range and the
-//!   reversal detector's settings (ssvr-core's `DetectorConfig::for_noise` of the scene's
-//!   displacement noise and rate, `with_friction` of its static and kinetic friction, and a ring
-//!   buffer sized for them), all as consts.
+//!   model's friction-event detector (host-sim's `model::Detector::for_model`): for the
+//!   stick-slip model ssvr-core's `PhaseDetector` on the slip acceleration
+//!   (`PhaseDetectorConfig::for_noise` of the scene's accelerometer noise), otherwise the
+//!   `ReversalDetector` on the displacement (`DetectorConfig::for_noise` of its displacement
+//!   noise and rate); `with_friction` of the static and kinetic friction, a ring buffer sized for
+//!   it, all as consts.
 //! * Board image: also `OUT_DIR/scene_board.rs` with the ADC configuration and sensor scaling.
 //!
 //! * The estimator model, `SSVR_MODEL` = `fixed-base` | `rectangular` (default) | `stick-slip`:
 //!   the cfg `ssvr_model = "fixed_base" | "rectangular" | "stick_slip"` selects the model's code
 //!   (only that model is compiled in), and `OUT_DIR/scene.rs` gets `MODEL`, the stick-slip
 //!   estimator's settings (`STICK_SLIP`) and its history (`HISTORY`: the detector's longest
-//!   back-dating at the scene's rate + 2, [`ssvr_core::reversal_detector::DetectorConfig::max_age_samples`]).
+//!   back-dating + 2).
 //!
 //! Rebuilds track the scene and the model: `rerun-if-env-changed=SSVR_SCENE`, `SSVR_MODEL` and
 //! `rerun-if-changed=<scene>`.
@@ -124,6 +127,15 @@ const CHANNELS: [&str; 4] = ["table_accel", "base_accel", "top_accel", "displace
 const DEFAULT_ACCEL_RANGE_M_S2: f64 = 4.0 * 9.80665;
 const DEFAULT_DISP_RANGE_M: f64 = 0.05;
 const DEFAULT_DISP_NOISE_RMS_M: f64 = 1e-6;
+const DEFAULT_ACCEL_NOISE_RMS_M_S2: f64 = 5e-3;
+
+/// The model's friction-event detector (host-sim's `model::Detector::for_model`): the stick-slip
+/// model times sticks and slip starts from the slip acceleration (base − table accelerometer),
+/// the others use the reversal detector on the displacement.
+enum DetectorChoice {
+    Displacement(ssvr_core::reversal_detector::DetectorConfig),
+    Acceleration(ssvr_core::phase_detector::PhaseDetectorConfig),
+}
 
 /// The parsed scene. The lookup is lenient about layout: every key is searched for anywhere in
 /// the document (depth first, `[structure]`, `[sensors.<channel>]` and `[adc]` tables first),
@@ -135,10 +147,13 @@ struct Scene {
     mu_static: f64,
     rate: f64,
     disp_noise: f64,
+    accel_noise: f64,
     accel_range: f64,
     disp_range: f64,
-    detector: ssvr_core::reversal_detector::DetectorConfig,
+    detector: DetectorChoice,
     ring: usize,
+    /// The detector's longest back-dating (samples).
+    max_age: usize,
 }
 
 fn find<'a>(v: &'a Value, keys: &[&str]) -> Option<&'a Value> {
@@ -247,23 +262,36 @@ impl Scene {
                 path.display()
             );
         }
-        // The same settings as host-sim's detector for this scene.
-        let detector = ssvr_core::reversal_detector::DetectorConfig::for_noise(disp_noise, rate)
-            .unwrap_or_else(|e| {
-                panic!(
-                    "scene {}: no reversal detector for disp_noise_rms_m = {disp_noise} at \
-                     {rate} Hz: {e:?}",
-                    path.display()
-                )
-            })
-            .with_friction(mu_static, params.friction_coefficient);
-        // The detector's ring must hold 2·fit_half + 2 samples; a power of two keeps its index
-        // arithmetic (u64 modulo) a mask on the M4F. The stick-slip model follows the stick
-        // phases and needs the stick times right: a ring that holds a stick's fit window.
-        let ring = if model == "stick-slip" {
-            detector.ring_for_sticks()
+        let accel_noise = sensor("accel_noise_rms_m_s2", DEFAULT_ACCEL_NOISE_RMS_M_S2);
+        // The same settings as host-sim's detector for this scene and model.
+        let (detector, ring, max_age) = if model == "stick-slip" {
+            let d = ssvr_core::phase_detector::PhaseDetectorConfig::for_noise(accel_noise)
+                .unwrap_or_else(|e| {
+                    panic!(
+                        "scene {}: no phase detector for accel_noise_rms_m_s2 = {accel_noise}: {e:?}",
+                        path.display()
+                    )
+                })
+                .with_friction(mu_static, params.friction_coefficient);
+            (
+                DetectorChoice::Acceleration(d),
+                d.min_ring(),
+                d.max_age_samples(),
+            )
         } else {
-            detector.min_ring()
+            let d = ssvr_core::reversal_detector::DetectorConfig::for_noise(disp_noise, rate)
+                .unwrap_or_else(|e| {
+                    panic!(
+                        "scene {}: no reversal detector for disp_noise_rms_m = {disp_noise} at \
+                         {rate} Hz: {e:?}",
+                        path.display()
+                    )
+                })
+                .with_friction(mu_static, params.friction_coefficient);
+            // The detector's ring must hold 2·fit_half + 2 samples; a power of two keeps its
+            // index arithmetic (u64 modulo) a mask on the M4F.
+            let ring = d.min_ring();
+            (DetectorChoice::Displacement(d), ring, d.max_age_samples(ring))
         };
         Self {
             path: path.to_path_buf(),
@@ -272,10 +300,12 @@ impl Scene {
             mu_static,
             rate,
             disp_noise,
+            accel_noise,
             accel_range,
             disp_range,
             detector,
             ring,
+            max_age,
         }
     }
 
@@ -285,7 +315,22 @@ impl Scene {
         // The detector settings as a struct literal through their `Debug` form (field names and
         // round-trip exact numbers), so new fields of `DetectorConfig` need no change here; the
         // same text is reported at run time for the host to compare.
-        let debug = format!("{:?}", self.detector);
+        let (debug, module, config, ty, input) = match &self.detector {
+            DetectorChoice::Displacement(d) => (
+                format!("{d:?}"),
+                "reversal_detector",
+                "DetectorConfig",
+                "ReversalDetector",
+                "the base-to-table displacement (m)",
+            ),
+            DetectorChoice::Acceleration(d) => (
+                format!("{d:?}"),
+                "phase_detector",
+                "PhaseDetectorConfig",
+                "PhaseDetector",
+                "the slip acceleration, base minus table accelerometer (m/s²)",
+            ),
+        };
         format!(
             "// Generated by build.rs from {scene:?}. Do not edit.\n\
              /// Scene the constants come from (`SSVR_SCENE`).\n\
@@ -296,22 +341,26 @@ impl Scene {
              pub const STRUCTURE: ssvr_core::StructureParams = ssvr_core::StructureParams {{\n\
              \x20   m1_kg: {m1:?},\n    m2_kg: {m2:?},\n    natural_frequency_hz: {f:?},\n\
              \x20   damping_ratio: {xi:?},\n    friction_coefficient: {mu:?},\n    gravity_m_s2: {g:?},\n}};\n\
-             /// Displacement sensor noise RMS (m) the detector is set for.\n\
+             /// Displacement sensor noise RMS (m) the displacement detector is set for.\n\
              pub const DISP_NOISE_RMS_M: f64 = {noise:?};\n\
+             /// Accelerometer noise RMS (m/s²) the slip-acceleration detector is set for.\n\
+             pub const ACCEL_NOISE_RMS_M_S2: f64 = {accel_noise:?};\n\
              /// Static friction coefficient (the detector's breakaway shape).\n\
              pub const STATIC_FRICTION_COEFFICIENT: f64 = {mu_s:?};\n\
              /// Displacement full scale ± (m): a sample at or beyond it is saturated.\n\
              pub const DISP_RANGE_M: f32 = f32::from_bits({range:#010x}); // {range_f:?}\n\
-             /// Reversal detector settings: `DetectorConfig::for_noise(DISP_NOISE_RMS_M,\n\
-             /// SAMPLE_RATE_HZ)?.with_friction(STATIC_FRICTION_COEFFICIENT, mu)`.\n\
-             pub const DETECTOR: ssvr_core::reversal_detector::DetectorConfig =\n\
-             \x20   ssvr_core::reversal_detector::{debug};\n\
+             /// The model's detector settings (`{config}::for_noise` of the scene's sensors,\n\
+             /// `with_friction(STATIC_FRICTION_COEFFICIENT, mu)`).\n\
+             pub const DETECTOR: ssvr_core::{module}::{config} =\n\
+             \x20   ssvr_core::{module}::{debug};\n\
              /// `DETECTOR` in its `Debug` form (reported in the `detector` message).\n\
              pub const DETECTOR_DEBUG: &str = {debug:?};\n\
-             /// Ring buffer length of the detector (power of two ≥ 2·fit_half + 2).\n\
+             /// Ring buffer length of the detector (a power of two holding its fit windows).\n\
              pub const DETECTOR_RING: usize = {ring};\n\
-             /// The detector type of this scene.\n\
-             pub type Detector = ssvr_core::reversal_detector::ReversalDetector<DETECTOR_RING>;\n",
+             /// Whether the detector reads the slip acceleration (else the displacement).\n\
+             pub const DETECTOR_ON_ACCEL: bool = {on_accel};\n\
+             /// The detector type of this scene and model: it processes {input}.\n\
+             pub type Detector = ssvr_core::{module}::{ty}<DETECTOR_RING>;\n",
             scene = self.path.display().to_string(),
             rate = self.rate,
             m1 = p.m1_kg,
@@ -321,6 +370,8 @@ impl Scene {
             mu = p.friction_coefficient,
             g = p.gravity_m_s2,
             noise = self.disp_noise,
+            accel_noise = self.accel_noise,
+            on_accel = matches!(self.detector, DetectorChoice::Acceleration(_)),
             mu_s = self.mu_static,
             range = (self.disp_range as f32).to_bits(),
             range_f = self.disp_range as f32,
@@ -333,7 +384,7 @@ impl Scene {
         use ssvr_core::stick_slip_estimator::{
             history_for_age, StickSlipCoefficients, StickSlipEstimator,
         };
-        let max_age = self.detector.max_age_samples(self.ring);
+        let max_age = self.max_age;
         let history = history_for_age(max_age);
         let structure = ssvr_core::Structure::new(self.params)
             .unwrap_or_else(|e| panic!("scene {}: {e:?}", self.path.display()));
@@ -384,7 +435,7 @@ impl Scene {
              \x20   ssvr_core::stick_slip_estimator::{debug};\n\
              /// `STICK_SLIP` in its `Debug` form (reported in the `model` message).\n\
              pub const STICK_SLIP_DEBUG: &str = {debug:?};\n\
-             /// The detector's longest back-dating (samples): `DETECTOR.max_age_samples(DETECTOR_RING)`.\n\
+             /// The detector's longest back-dating (samples).\n\
              pub const MAX_EVENT_AGE_SAMPLES: usize = {max_age};\n\
              /// History of the stick-slip estimator (samples): `MAX_EVENT_AGE_SAMPLES + 2`.\n\
              pub const HISTORY: usize = {history};\n\

@@ -226,7 +226,7 @@ impl<const N: usize> PhaseDetector<N> {
             return Some(SlipEvent::Stick { age_samples: age });
         }
         // A gentle stop (s̈ → 0 as v → 0, no jump) is only seen through v, when v is trusted.
-        if !jump && !(crossed && stuck && !self.v_held) {
+        if !(jump || (crossed && stuck && !self.v_held)) {
             if crossed {
                 // v reached zero but s̈ shows no event: the integrated velocity is off (by the
                 // jump at the slip start, known to a sample only). Hold it at zero.
@@ -345,7 +345,7 @@ impl<const N: usize> PhaseDetector<N> {
                     }
                 }
                 let det = n * suu - su * su;
-                if !(det > 0.0) {
+                if det.is_nan() || det <= 0.0 {
                     return f32::INFINITY;
                 }
                 // −(explained sum of squares): bᵀA⁻¹b.
@@ -366,7 +366,7 @@ impl<const N: usize> PhaseDetector<N> {
                         sga += g * a(i);
                     }
                 }
-                if !(sgg > 0.0) {
+                if sgg.is_nan() || sgg <= 0.0 {
                     return f32::INFINITY;
                 }
                 -(sga * sga / sgg)
@@ -515,7 +515,11 @@ mod tests {
             let t = k as f64;
             let e = (t / period).floor();
             let u = t - e * period - stuck;
-            let dir = if (e as u64) % 2 == 0 { 1.0 } else { -1.0 };
+            let dir = if (e as u64).is_multiple_of(2) {
+                1.0
+            } else {
+                -1.0
+            };
             let a = if u > 0.0 && u <= us {
                 dir * (slope * u - c * u * u)
             } else {
@@ -542,10 +546,12 @@ mod tests {
                 errs.push((ep, te - want));
             }
         }
-        assert_eq!((starts as u64, sticks as u64, other), (episodes, episodes, 0));
-        let rms = |v: &[(f64, f64)]| {
-            (v.iter().map(|(_, e)| e * e).sum::<f64>() / v.len() as f64).sqrt()
-        };
+        assert_eq!(
+            (starts as u64, sticks as u64, other),
+            (episodes, episodes, 0)
+        );
+        let rms =
+            |v: &[(f64, f64)]| (v.iter().map(|(_, e)| e * e).sum::<f64>() / v.len() as f64).sqrt();
         let half = errs.len() / 2;
         let (first, last) = (rms(&errs[..half]), rms(&errs[half..]));
         let max = errs.iter().map(|(_, e)| e.abs()).fold(0.0, f64::max);
@@ -576,5 +582,57 @@ mod tests {
             ..cfg
         };
         assert!(PhaseDetector::<64>::new(bad).is_err());
+    }
+
+    /// The firmware benchmark's signals (firmware/src/app/bench.rs): a reversal every 1.5·`a`
+    /// samples (accelerate a samples at 1 m/s², decelerate at 2 m/s² until v = 0, then the
+    /// friction flips); a stick and a slip start per staircase step.
+    #[test]
+    fn the_benchmark_signals_give_their_events() {
+        let cfg = PhaseDetectorConfig::for_noise(5e-3).unwrap();
+        let reversing = |i: u32, a: u32| -> f32 {
+            let half = a + a / 2;
+            let (q, m) = (i / half, i % half);
+            let d = if q % 2 == 0 { 1.0 } else { -1.0 };
+            if m < a {
+                d
+            } else {
+                -2.0 * d
+            }
+        };
+        let mut d = PhaseDetector::<64>::new(cfg).unwrap();
+        let mut n = [0u32; 3];
+        for i in 0..10_050 {
+            match d.process(reversing(i, 60)) {
+                Some(SlipEvent::SlipStart { .. }) => n[0] += 1,
+                Some(SlipEvent::Reversal { .. }) => n[1] += 1,
+                Some(SlipEvent::Stick { .. }) => n[2] += 1,
+                None => {}
+            }
+        }
+        assert_eq!(n, [1, 111, 0]);
+        let stair = |i: u32, period: u32, rise: u32| -> f32 {
+            let m = i % period;
+            if m < rise {
+                0.0
+            } else if m < rise + 20 {
+                0.2 * (m - rise + 1) as f32
+            } else if m < rise + 40 {
+                -2.0
+            } else {
+                0.0
+            }
+        };
+        let mut d = PhaseDetector::<64>::new(cfg).unwrap();
+        let mut n = [0u32; 3];
+        for i in 0..2_000 {
+            match d.process(stair(i, 100, 40)) {
+                Some(SlipEvent::SlipStart { .. }) => n[0] += 1,
+                Some(SlipEvent::Reversal { .. }) => n[1] += 1,
+                Some(SlipEvent::Stick { .. }) => n[2] += 1,
+                None => {}
+            }
+        }
+        assert_eq!(n, [20, 0, 20]);
     }
 }

@@ -39,6 +39,7 @@ use serde::Serialize;
 use ssvr_core::duhamel_closed_form::{DuhamelClosedForm, Reversal, ReversalTrain};
 use ssvr_core::duhamel_recursion::Estimator32;
 use ssvr_core::math::{F32Poly, Libm};
+use ssvr_core::phase_detector::{PhaseDetector, PhaseDetectorConfig};
 use ssvr_core::reversal_detector::{DetectorConfig, ReversalDetector, SlipEvent};
 use ssvr_core::stick_slip_estimator::{history_for_age, MuEstimate, StickSlipEstimator};
 use std::io::Write;
@@ -50,7 +51,7 @@ pub const HOST_TOLERANCE_GMU: f64 = 1e-6;
 /// Goal: instructions of a steady-state estimator sample on the M4F (rectangular model).
 pub const GOAL_INSTRUCTIONS_PER_SAMPLE: f64 = 20.0;
 /// Goal: instructions of a steady-state sample of the stick-slip estimator (sliding, μ identified
-/// on every sample) and of the fixed-base model (stuck) on the M4F.
+/// on every block of samples) and of the fixed-base model (stuck) on the M4F.
 pub const GOAL_INSTRUCTIONS_PER_SAMPLE_STICK_SLIP: f64 = 40.0;
 /// Storage of the host's stick-slip estimators (samples); the firmware's history is at most this
 /// (firmware/build.rs checks it).
@@ -72,10 +73,13 @@ pub const GOAL_BOARD_RAM_BYTES: u64 = 8 * 1024;
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DetectorSetup {
     /// `DetectorConfig::for_noise(disp_noise_rms_m, rate_hz)?.with_friction(μs, μ)` (the
-    /// settings of `host-sim run` too).
+    /// settings of `host-sim run` too): the rectangular and fixed-base models' detector.
     pub config: DetectorConfig,
-    /// Ring buffer length: `config.min_ring()` (the power of two ≥ 2·fit_half + 2), or for the
-    /// stick-slip model `config.ring_for_sticks()` (it also holds a stick's fit window).
+    /// The stick-slip model's detector on the slip acceleration:
+    /// `PhaseDetectorConfig::for_noise(accel_noise_rms_m_s2)?.with_friction(μs, μ)`.
+    pub phase: Option<PhaseDetectorConfig>,
+    /// Ring buffer length: `config.min_ring()` (the power of two ≥ 2·fit_half + 2), or the
+    /// phase detector's `min_ring()`.
     pub ring: usize,
     /// Displacement full scale (m) in f32: a sample at or beyond it is unusable.
     pub disp_range_m: f32,
@@ -100,12 +104,21 @@ impl DetectorSetup {
                 scene.static_friction_coefficient,
                 scene.structure.params().friction_coefficient,
             );
-        let ring = if model == Model::StickSlip {
-            config.ring_for_sticks()
-        } else {
-            config.min_ring()
+        let phase = (model::Detector::kind_for(model) == model::DetectorKind::SlipAcceleration)
+            .then(|| {
+                PhaseDetectorConfig::for_noise(scene.sensors.accel_noise_rms_m_s2).map(|c| {
+                    c.with_friction(
+                        scene.static_friction_coefficient,
+                        scene.structure.params().friction_coefficient,
+                    )
+                })
+            })
+            .transpose()
+            .map_err(|e| anyhow!("no phase detector for the scene: {e:?}"))?;
+        let (ring, max_age) = match &phase {
+            Some(c) => (c.min_ring(), c.max_age_samples()),
+            None => (config.min_ring(), config.max_age_samples(config.min_ring())),
         };
-        let max_age = config.max_age_samples(ring);
         let history = history_for_age(max_age);
         if history > HOST_HISTORY_CAPACITY {
             bail!(
@@ -115,6 +128,7 @@ impl DetectorSetup {
         }
         Ok(Self {
             config,
+            phase,
             ring,
             disp_range_m: scene.sensors.disp_range_m as f32,
             max_age,
@@ -152,7 +166,10 @@ impl DetectorSetup {
             .iter()
             .find(|f| f.kind() == "detector")
             .ok_or_else(|| anyhow!("the firmware reported no `detector` message"))?;
-        let want = format!("detector {:?}", self.config);
+        let want = match &self.phase {
+            Some(c) => format!("detector {c:?}"),
+            None => format!("detector {:?}", self.config),
+        };
         if d.message != want {
             bail!(
                 "the firmware's detector differs from the host's: `{}` vs `{want}`",
@@ -307,13 +324,22 @@ impl HostEstimator {
     }
 }
 
+/// The firmware's detector of a model (`scene::Detector`), on the host.
+#[derive(Debug, Clone)]
+enum HostDetector<const N: usize> {
+    /// On the displacement (rectangular, fixed-base).
+    Displacement(ReversalDetector<N>),
+    /// On the slip acceleration (stick-slip).
+    Acceleration(PhaseDetector<N>),
+}
+
 /// The firmware's per-sample step (`firmware/src/app/pipeline.rs`), on the host, with the same
 /// ssvr-core code: flags, `ReversalDetector` on the displacement (NaN when unusable), the event
 /// to the model's estimator (`model::push`), its update (`model::update`).
 #[derive(Debug, Clone)]
 pub struct HostPipeline<const N: usize> {
     estimator: HostEstimator,
-    detector: ReversalDetector<N>,
+    detector: HostDetector<N>,
     disp_range_m: f32,
     log_reversals: bool,
     /// Events pushed with a clamped age.
@@ -336,8 +362,16 @@ impl<const N: usize> HostPipeline<N> {
     ) -> Result<Self> {
         Ok(Self {
             estimator: HostEstimator::new(scene, setup, model)?,
-            detector: ReversalDetector::new(setup.config)
-                .map_err(|e| anyhow!("the detector rejects its settings: {e:?}"))?,
+            detector: match setup.phase {
+                Some(c) => HostDetector::Acceleration(
+                    PhaseDetector::new(c)
+                        .map_err(|e| anyhow!("the detector rejects its settings: {e:?}"))?,
+                ),
+                None => HostDetector::Displacement(
+                    ReversalDetector::new(setup.config)
+                        .map_err(|e| anyhow!("the detector rejects its settings: {e:?}"))?,
+                ),
+            },
             disp_range_m: setup.disp_range_m,
             log_reversals,
             clamped: 0,
@@ -374,11 +408,21 @@ impl<const N: usize> HostPipeline<N> {
         if s.missing || !disp.is_finite() || disp.abs() >= self.disp_range_m {
             f |= ff::DISP_INVALID;
         }
-        let detected = self.detector.process(if f & ff::DISP_INVALID != 0 {
-            f32::NAN
-        } else {
-            disp
-        });
+        // `pipeline::detector_input`.
+        let detected = match &mut self.detector {
+            HostDetector::Displacement(d) => d.process(if f & ff::DISP_INVALID != 0 {
+                f32::NAN
+            } else {
+                disp
+            }),
+            HostDetector::Acceleration(d) => {
+                d.process(if f & (ff::MISSING | ff::NOT_FINITE | ff::SATURATED) != 0 {
+                    f32::NAN
+                } else {
+                    s.base_accel_m_s2 - s.table_accel_m_s2
+                })
+            }
+        };
         let event = if self.log_reversals {
             s.reversal.map(|r| FrameEvent {
                 kind: event_kind::LOG,
@@ -636,7 +680,7 @@ pub struct QemuReport {
     /// Stick-slip and fixed-base models: instructions of a steady-state stuck update.
     pub instructions_per_sample_stuck: Option<f64>,
     /// Stick-slip model: instructions of a steady-state sliding update without the μ
-    /// identification (the prediction alone; the firmware identifies on every sample).
+    /// identification (the prediction alone; the firmware identifies on every block of samples).
     pub instructions_per_sample_without_identification: Option<f64>,
     /// Stick-slip model: extra instructions of a sample with an event `max_event_age` samples old
     /// (the whole history re-simulated).

@@ -11,8 +11,11 @@
 //! 1. flags: `NOT_FINITE` if a channel is NaN/inf; the displacement is unusable (`DISP_INVALID`)
 //!    if the sample is missing, the displacement is not finite, flagged saturated upstream, or at
 //!    or beyond the compiled-in full scale `scene::DISP_RANGE_M`;
-//! 2. the detector (`ssvr_core::reversal_detector`) processes the displacement, or NaN when it is
-//!    unusable (the detector then repeats its last value and keeps time);
+//! 2. the model's detector processes its input, or NaN when that is unusable (the detector then
+//!    repeats its last value and keeps time): the reversal detector (`ssvr_core::reversal_detector`)
+//!    the displacement (rectangular, fixed-base), the phase detector (`ssvr_core::phase_detector`)
+//!    the slip acceleration, base minus table accelerometer (stick-slip; unusable when the sample
+//!    is missing, not finite or saturated);
 //! 3. the event goes to the estimator of the compiled-in model ([`super::model::push`]):
 //!    rectangular: a slip start or reversal as `push_reversal(event.friction_level(),
 //!    event.age_samples())`, a stick is reported but not pushed (the rectangular model keeps its
@@ -32,6 +35,10 @@ use ssvr_core::reversal_detector::SlipEvent;
 /// displacement (m).
 pub const CHANNELS: usize = 4;
 
+/// Index of the table accelerometer channel.
+pub const TABLE: usize = 0;
+/// Index of the base accelerometer channel.
+pub const BASE: usize = 1;
 /// Index of the displacement channel.
 pub const DISP: usize = 3;
 
@@ -118,6 +125,23 @@ pub struct Reversal {
     pub level: f32,
     /// Sample intervals between the reversal and the sample the next update returns (≥ 0).
     pub age_samples: f32,
+}
+
+/// The detector's input of a sample with flags `f` (NaN: unusable): the displacement, or for the
+/// phase detector the slip acceleration (base minus table accelerometer).
+#[inline(always)]
+pub fn detector_input(channels: &[f32; CHANNELS], f: u8) -> f32 {
+    if scene::DETECTOR_ON_ACCEL {
+        if f & (flags::MISSING | flags::NOT_FINITE | flags::SATURATED) != 0 {
+            f32::NAN
+        } else {
+            channels[BASE] - channels[TABLE]
+        }
+    } else if f & flags::DISP_INVALID != 0 {
+        f32::NAN
+    } else {
+        channels[DISP]
+    }
 }
 
 /// Where the estimator's friction events come from.
@@ -233,11 +257,7 @@ impl Pipeline {
         if f & flags::MISSING != 0 || !disp.is_finite() || disp.abs() >= scene::DISP_RANGE_M {
             f |= flags::DISP_INVALID;
         }
-        let detected = self.detector.process(if f & flags::DISP_INVALID != 0 {
-            f32::NAN
-        } else {
-            disp
-        });
+        let detected = self.detector.process(detector_input(&s.channels, f));
         let event = match self.source {
             EventSource::Detector => detected.as_ref().map(Event::from_detector),
             EventSource::Samples => s.reversal.map(|r| Event {
