@@ -119,6 +119,7 @@ const STICK_SLIP: ssvr_core::stick_slip_estimator::StickSlipConfig =
 const FIXED_BASE: ssvr_core::stick_slip_estimator::StickSlipConfig =
     ssvr_core::stick_slip_estimator::StickSlipConfig {
         identify_mu: false,
+        observer_bandwidth: 0.0,
         ..STICK_SLIP
     };
 

@@ -106,6 +106,9 @@ pub struct PhaseDetector<const N: usize> {
     v: f32,
     /// The integrated velocity was found off and is held at zero until the next event.
     v_held: bool,
+    /// Uncertainty of the integrated velocity from the slip start (m/s² × samples): a jump
+    /// breakaway is known to a sample only, so up to the jump times a sample.
+    v_unc: f32,
     /// Consecutive samples with |s̈| below the threshold (while sliding).
     in_band: usize,
     /// While stuck: the first sample above the threshold (a slip start being confirmed).
@@ -137,6 +140,7 @@ impl<const N: usize> PhaseDetector<N> {
             direction: 0,
             v: 0.0,
             v_held: false,
+            v_unc: 0.0,
             in_band: 0,
             pending: None,
             stick_at: (0, 0.0),
@@ -209,7 +213,7 @@ impl<const N: usize> PhaseDetector<N> {
         };
         let m = self.cfg.stall_samples;
         if self.in_band >= m
-            && (self.v_held || libm::fabsf(self.v) <= STALL_VELOCITY * m as f32 * thr)
+            && (self.v_held || libm::fabsf(self.v) <= STALL_VELOCITY * m as f32 * thr + self.v_unc)
         {
             // s̈ has stayed at zero for `stall_samples` with no jump seen (a stick too gentle or
             // too noisy for one), and the velocity is about zero: the base sticks, since the
@@ -388,12 +392,18 @@ impl<const N: usize> PhaseDetector<N> {
         let j0 = k - (libm::floorf(-tb).max(0.0) as u64).min(k - lo);
         let first = rel(j0, k) - tb;
         let mut v = if self.cfg.jump_breakaway { 1.0 } else { 0.5 } * a(j0) * first.max(0.0);
+        let v_unc = if self.cfg.jump_breakaway {
+            libm::fabsf(a(j0))
+        } else {
+            0.0
+        };
         let mut i = j0;
         while i < k {
             v += 0.5 * (a(i) + a(i + 1));
             i += 1;
         }
         self.v = v;
+        self.v_unc = v_unc;
         self.v_held = false;
         self.in_band = 0;
         self.direction = s;

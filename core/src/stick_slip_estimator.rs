@@ -173,17 +173,26 @@ pub struct StickSlipConfig {
     /// Identify on blocks of this many samples (1 ..= [`MAX_IDENTIFY_EVERY`]): one RLS update
     /// per block, from its last sample; the cost of the identification is spread over the block.
     pub identify_every: u32,
+    /// Measurement correction while the base sticks, as the observer's bandwidth in units of the
+    /// natural circular frequency p (0: open loop): each stuck sample moves the state towards the
+    /// measured top acceleration so that, stuck, the state error decays like a critically damped
+    /// oscillator at this bandwidth (see the module documentation). It bounds the growth of
+    /// errors that switching between the sliding and the stuck dynamics at given times pumps up
+    /// (undamped structures: ~20/s).
+    pub observer_bandwidth: f64,
 }
 
 impl StickSlipConfig {
     /// The defaults (also [`Default`]): identify μ, do not adopt it, λ = 0.9999 per sample,
-    /// blocks of 32 samples, 64 updates (2048 sliding samples) before adoption.
+    /// blocks of 32 samples, 64 updates (2048 sliding samples) before adoption, an observer
+    /// bandwidth of 2p while stuck.
     pub const DEFAULT: Self = Self {
         identify_mu: true,
         use_identified_mu: false,
         forgetting: 0.9999,
         min_samples: 64,
         identify_every: 32,
+        observer_bandwidth: 2.0,
     };
 }
 
@@ -502,6 +511,8 @@ pub struct StickSlipEstimator<T: Real, M: Transcendentals<T>, const H: usize> {
     stuck_until: usize,
     /// Forcing per interval in the current sliding phase: ±g·μ_use times `c.force_s`.
     drive: [T; 2],
+    /// Measurement correction of a stuck sample: the state += `gain`·(prediction − measured).
+    gain: [T; 2],
     c: StickSlipCoefficients<T>,
     /// [`MODE_SLIDE`], [`MODE_STUCK`] or [`MODE_COLD`]: how to step interval k − 1 → k.
     mode: u8,
@@ -539,6 +550,37 @@ pub struct StickSlipEstimator<T: Real, M: Transcendentals<T>, const H: usize> {
     /// Their switch fractions (the first `packed::switches(iv)` are valid).
     fr: [[T; MAX_SWITCHES]; H],
     _m: PhantomData<M>,
+}
+
+/// The stuck-phase observer's per-sample gain for a bandwidth of `b`·p, in the estimator's state
+/// coordinates (ü1, pδ'). With z = (p²δ, pδ') the stuck dynamics are ż = [[0, p], [−p, −2ξp]]z
+/// (+ input) and the measurement ü1 = −(z0 + 2ξz1); the correction ż += K·(ü1_pred − ü1_meas)
+/// gives the error dynamics the characteristic polynomial λ² + (K0 + 2ξp)λ + p(p + K1) + 2ξpK0,
+/// a double root at −bp for K0 = 2bp − 2ξp, K1 = ((bp)² − 2ξpK0)/p − p; per sample K·Δt
+/// (forward Euler: bp·Δt ≪ 1 at usual rates), mapped to (ü1, pδ'): Δü1 = −(Δz0 + 2ξΔz1).
+fn observer_gain<T: Real>(c: &StickSlipCoefficients<T>, b: f64) -> [T; 2] {
+    if b <= 0.0 {
+        return [T::ZERO; 2];
+    }
+    let (p, two_xi, dt) = (c.p.to_f64(), c.two_xi.to_f64(), c.dt.to_f64());
+    let w = b * p;
+    let k0 = 2.0 * w - two_xi * p;
+    let k1 = (w * w - two_xi * p * k0) / p - p;
+    let (g0, g1) = (k0 * dt, k1 * dt);
+    [T::from_f64(-(g0 + two_xi * g1)), T::from_f64(g1)]
+}
+
+/// The measurement correction of the state `z` (ü1 first) of a sample that starts a stuck
+/// interval, with the sample's measured top acceleration `y` (none if not finite): the stored
+/// state stays the prediction, the interval starts from the corrected one.
+#[inline(always)]
+fn correct<T: Real>(gain: [T; 2], z: [T; 2], y: T) -> [T; 2] {
+    if y.is_finite() {
+        let r = z[0] - y;
+        [z[0] + gain[0] * r, z[1] + gain[1] * r]
+    } else {
+        z
+    }
 }
 
 #[inline(always)]
@@ -661,6 +703,13 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
                 expected: "a history of at least 2 samples, at most the storage H",
             });
         }
+        crate::error::check(
+            Param::EventTime,
+            cfg.observer_bandwidth,
+            cfg.observer_bandwidth >= 0.0 && cfg.observer_bandwidth <= 10.0,
+            "observer bandwidth in [0, 10] × p",
+        )?;
+        let gain = observer_gain(&c, cfg.observer_bandwidth);
         let n = cfg.identify_every;
         // The n-step sliding maps, composed in f64 from the per-sample ones.
         let per_sample = (c.phi_s.map(T::to_f64), c.force_s.map(T::to_f64));
@@ -696,6 +745,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
             fast_until: 0,
             stuck_until: 0,
             drive: [T::ZERO; 2],
+            gain,
             c,
             mode: MODE_COLD,
             phase: 0,
@@ -910,10 +960,17 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
         &self,
         z: [T; 2],
         (u0, u1): (T, T),
+        y0: T,
         iv: u8,
         fr: &[T; MAX_SWITCHES],
         (mu, gmu): (T, T),
     ) -> [T; 2] {
+        // A stuck start: from the corrected state.
+        let z = if iv & 3 == 0 {
+            correct(self.gain, z, y0)
+        } else {
+            z
+        };
         if packed::switches(iv) != 0 {
             return self.step_switched(z, (u0, u1), iv, fr, mu);
         }
@@ -960,7 +1017,8 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
                 (self.slots.get_mut(at..), table_accel.is_finite())
             {
                 let c = &self.c;
-                let (z, u0, du) = (prev.z, prev.u, table_accel - prev.u);
+                let z = correct(self.gain, prev.z, prev.y);
+                let (u0, du) = (prev.u, table_accel - prev.u);
                 let w = mat(&c.phi_f, z);
                 let z = [
                     z[0] + (w[0] + c.b0[0] * u0 + c.b1[0] * du),
@@ -990,7 +1048,8 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
                 (self.slots.get_mut(at..), table_accel.is_finite())
             {
                 let c = &self.c;
-                let (z, u0, du) = (prev.z, prev.u, table_accel - prev.u);
+                let z = correct(self.gain, prev.z, prev.y);
+                let (u0, du) = (prev.u, table_accel - prev.u);
                 let w = mat(&c.phi_f, z);
                 let z = [
                     z[0] + (w[0] + c.b0[0] * u0 + c.b1[0] * du),
@@ -1074,7 +1133,14 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
             } else {
                 packed::new(self.phase)
             };
-            let z = self.step(prev.z, (prev.u, u), iv, &fr, (self.mu_use, self.gmu));
+            let z = self.step(
+                prev.z,
+                (prev.u, u),
+                prev.y,
+                iv,
+                &fr,
+                (self.mu_use, self.gmu),
+            );
             (u, z)
         };
         if let Some(s) = self.slots.get_mut(pos) {
@@ -1306,7 +1372,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
             else {
                 break;
             };
-            z = self.step(z, (a.u, b.u), code, fr, mu);
+            z = self.step(z, (a.u, b.u), a.y, code, fr, mu);
             if let Some(b) = self.slots.get_mut(sb) {
                 b.z = z;
             }

@@ -37,6 +37,7 @@ pub const STICK_SLIP_CONFIG: StickSlipConfig = StickSlipConfig {
 /// leaves its stuck phase, so identifying μ would change nothing but the cost).
 pub const FIXED_BASE_CONFIG: StickSlipConfig = StickSlipConfig {
     identify_mu: false,
+    observer_bandwidth: 0.0,
     ..STICK_SLIP_CONFIG
 };
 

@@ -144,12 +144,13 @@ fn check_stick_slip(v: &Value, samples: u64) {
     // The f32 estimator against the f64 one on the same detected events and inputs (measured
     // ≤ 5e-6 gμ).
     assert!(num(v, "max_err_vs_reference_gmu") < 1e-4, "{v}");
-    // Measured (docs/PERFORMANCE.md): 38.8 per sliding sample with the μ identification, 49
-    // stuck, 34 sliding without the identification, ~860 per event at age 0.5.
+    // Measured (docs/PERFORMANCE.md): 38.8 per sliding sample with the μ identification, 60.1
+    // stuck (with the observer's correction; 49 without), 34 sliding without the
+    // identification, ~870 per event at age 0.5.
     let ips = num(v, "instructions_per_sample");
     assert!(ips > 20.0 && ips <= 40.0, "instructions per sample {ips}");
     let stuck = num(v, "instructions_per_sample_stuck");
-    assert!(stuck > 20.0 && stuck <= 60.0, "stuck {stuck}");
+    assert!(stuck > 20.0 && stuck <= 70.0, "stuck {stuck}");
     let bare = num(v, "instructions_per_sample_without_identification");
     assert!(bare > 20.0 && bare <= ips, "without identification {bare}");
     let ev = num(v, "instructions_per_reversal");

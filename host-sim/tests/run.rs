@@ -478,3 +478,59 @@ fn stick_slip_scenes_prediction_and_friction() {
         assert!((mu / 0.2 - 1.0).abs() < 0.02, "{file}: mu {mu}");
     }
 }
+
+/// The stick-slip model on hard cases (the Table 1 specimen, 2 m/s² at 0.143 s, 5 s): an undamped
+/// structure (switching between the sliding and the stuck dynamics at given times pumps errors up
+/// at ~20/s without the stuck-phase measurement correction), a nearly massless base, coarse
+/// sampling with static friction above kinetic (slip starts known to a sample only), and
+/// accelerometers 40× noisier than the default. Every event is found, none invented; the error
+/// stays within the bound.
+#[test]
+fn stick_slip_hard_cases() {
+    // (name, m2, ξ, rate, μs, accel noise, measured RMS %, bound %)
+    let cases = [
+        ("undamped", 1.75, 0.0, 10_000.0, 0.2, 5e-3, 0.067, 0.2),
+        ("light base", 0.001, 0.05, 10_000.0, 0.2, 5e-3, 0.099, 0.3),
+        ("1 kHz, μs > μ", 1.75, 0.05, 1_000.0, 0.25, 5e-3, 0.90, 2.0),
+        (
+            "noisy accelerometers",
+            1.75,
+            0.05,
+            10_000.0,
+            0.2,
+            0.2,
+            0.65,
+            1.5,
+        ),
+    ];
+    for (name, m2, xi, rate, mu_s, noise, _measured, bound) in cases {
+        let dir = tempfile::tempdir().unwrap();
+        let text = format!(
+            "name = \"{name}\"\nduration_s = 5.0\n[structure]\nm1_kg = 29.5\nm2_kg = {m2}\n\
+             natural_frequency_hz = 7.0\ndamping_ratio = {xi}\nfriction_coefficient = 0.2\n\
+             static_friction_coefficient = {mu_s}\n[input]\nkind = \"harmonic\"\n\
+             amplitude_m_s2 = 2.0\nperiod_s = 0.143\n[sampling]\nrate_hz = {rate}\n\
+             [sensors]\naccel_noise_rms_m_s2 = {noise}\n"
+        );
+        let scene = write(dir.path(), "hard.toml", &text);
+        let out = host_sim()
+            .current_dir(dir.path())
+            .args(["run", scene.to_str().unwrap(), "--json", "--out", "x.csv"])
+            .output()
+            .unwrap();
+        ok(&out);
+        let v = json(&out.stdout);
+        let e = &v["estimator"];
+        assert_eq!(e["model"], "stick-slip", "{name}: {v}");
+        assert_eq!(v["detection"]["missed"], 0, "{name}: {v}");
+        assert_eq!(v["detection"]["false"], 0, "{name}: {v}");
+        let rms = e["rms_err_pct_of_peak"].as_f64().unwrap();
+        assert!(rms < bound, "{name}: rms {rms} % (bound {bound} %)");
+        // μ̂ within 2 % where identified: at 1 kHz no sliding stretch holds a whole
+        // identification block of 32 samples, so μ is not identified (null).
+        match e["mu_estimate"].as_f64() {
+            Some(mu) => assert!((mu / 0.2 - 1.0).abs() < 0.02, "{name}: mu {mu}"),
+            None => assert_eq!(rate, 1_000.0, "{name}: no mu estimate"),
+        }
+    }
+}
