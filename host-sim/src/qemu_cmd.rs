@@ -664,7 +664,8 @@ pub struct QemuReport {
     pub mu_estimate: Option<f64>,
     /// Its standard deviation.
     pub mu_std: Option<f64>,
-    /// Samples it used.
+    /// Identification updates it used (one per block of `identify_every` = 32 final sliding
+    /// samples).
     pub mu_samples: Option<u32>,
     /// The firmware's μ̂ equals the host's (bit for bit; true when neither has one).
     pub mu_equals_host: bool,
@@ -1181,7 +1182,7 @@ pub fn print_report(r: &QemuReport, out: &mut impl Write) -> std::io::Result<()>
     if let (Some(mu), Some(sd), Some(n)) = (r.mu_estimate, r.mu_std, r.mu_samples) {
         writeln!(
             out,
-            "  identified friction coefficient (firmware): mu = {mu:.5} ± {sd:.5} ({n} samples)"
+            "  identified friction coefficient (firmware): mu = {mu:.5} ± {sd:.5} ({n} identification updates, one per block of sliding samples)"
         )?;
     }
     writeln!(
