@@ -35,6 +35,14 @@
 //! inside the interval, a phase change at its end, a non-finite table acceleration, sample 0, and
 //! the marks, where the rare work is done: the ring's wrap and the identification blocks.
 //!
+//! **Stuck-phase observer.** Switching between the sliding and the stuck dynamics at given
+//! times (the estimator's situation; the truth switches on its own state) is parametrically
+//! unstable for the estimator's errors: undamped, they grow ~20/s. While the base sticks, every
+//! interval therefore starts from the state corrected towards the measured top acceleration,
+//! z += K·Δt·(ü1_pred − ü1_meas), with K giving the error a double pole at −b·p
+//! ([`StickSlipConfig::observer_bandwidth`] = b, default 2; 0: open loop); the stored state stays
+//! the prediction, so a sample's prediction never uses its own measurement.
+//!
 //! **Friction identification.** While the base slides, z = z_h + μ·z_u, where z_h is the free
 //! evolution of the state at the start of the sliding episode and z_u the response to the friction
 //! per unit μ: ü1 is linear in μ. The identification runs on blocks of `n` =
