@@ -292,7 +292,11 @@ impl Scene {
             // The detector's ring must hold 2·fit_half + 2 samples; a power of two keeps its
             // index arithmetic (u64 modulo) a mask on the M4F.
             let ring = d.min_ring();
-            (DetectorChoice::Displacement(d), ring, d.max_age_samples(ring))
+            (
+                DetectorChoice::Displacement(d),
+                ring,
+                d.max_age_samples(ring),
+            )
         };
         Self {
             path: path.to_path_buf(),

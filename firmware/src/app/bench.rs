@@ -262,7 +262,10 @@ fn run_detector(t: &mut Ticks, est: &Estimator, det: &Detector) {
         let mut events: u32 = 0;
         let ticks = t.time(|| {
             for i in WARMUP..WARMUP + DETECTOR_SAMPLES {
-                if black_box(&mut d).process(detector_signal(i, half)).is_some() {
+                if black_box(&mut d)
+                    .process(detector_signal(i, half))
+                    .is_some()
+                {
                     events += 1;
                 }
             }
