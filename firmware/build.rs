@@ -105,8 +105,8 @@ fn main() {
 const MODELS: [&str; 3] = ["fixed-base", "rectangular", "stick-slip"];
 
 /// The stick-slip estimator's settings in the firmware (host-sim's `model::STICK_SLIP_CONFIG`,
-/// which `host-sim qemu` checks against the firmware's `model` message): μ identified and
-/// adopted at the start of each sliding episode.
+/// `for_rate` of the scene's rate, which `host-sim qemu` checks against the firmware's `model`
+/// message): μ identified and adopted at the start of each sliding episode.
 const STICK_SLIP: ssvr_core::stick_slip_estimator::StickSlipConfig =
     ssvr_core::stick_slip_estimator::StickSlipConfig {
         use_identified_mu: true,
@@ -414,7 +414,9 @@ impl Scene {
                 self.path.display(),
                 self.rate
             );
-            if let Err(e) = Check::from_coefficients(coefficients, STICK_SLIP, history) {
+            if let Err(e) =
+                Check::from_coefficients(coefficients, STICK_SLIP.for_rate(self.rate), history)
+            {
                 panic!(
                     "scene {}: the stick-slip estimator rejects the scene: {e:?}",
                     self.path.display()
@@ -430,7 +432,8 @@ impl Scene {
             FIXED_BASE
         } else {
             STICK_SLIP
-        };
+        }
+        .for_rate(self.rate);
         let debug = format!("{cfg:?}");
         format!(
             "/// The estimator model (`SSVR_MODEL`).\n\

@@ -204,6 +204,20 @@ impl StickSlipConfig {
     };
 }
 
+impl StickSlipConfig {
+    /// These settings with identification blocks of ~3.2 ms at `sample_rate_hz` (32 samples at
+    /// 10 kHz, 3 at 1 kHz: a block must fit in the sliding stretches between events, which last
+    /// a few ms to tens of ms) and `min_samples` updates covering 2048 samples.
+    pub fn for_rate(self, sample_rate_hz: f64) -> Self {
+        let n = libm::floor(sample_rate_hz * 3.2e-3).clamp(1.0, MAX_IDENTIFY_EVERY as f64) as u32;
+        Self {
+            identify_every: n,
+            min_samples: 2048u32.div_ceil(n),
+            ..self
+        }
+    }
+}
+
 impl Default for StickSlipConfig {
     fn default() -> Self {
         Self::DEFAULT

@@ -41,12 +41,14 @@ pub const FIXED_BASE_CONFIG: StickSlipConfig = StickSlipConfig {
     ..STICK_SLIP_CONFIG
 };
 
-/// The stick-slip estimator's settings of a model (rectangular: unused, the stick-slip ones).
-pub fn stick_slip_config(model: Model) -> StickSlipConfig {
+/// The stick-slip estimator's settings of a model at a sample rate (rectangular: unused, the
+/// stick-slip ones), with identification blocks of ~3.2 ms ([`StickSlipConfig::for_rate`]).
+pub fn stick_slip_config(model: Model, rate_hz: f64) -> StickSlipConfig {
     match model {
         Model::FixedBase => FIXED_BASE_CONFIG,
         Model::Rectangular | Model::StickSlip => STICK_SLIP_CONFIG,
     }
+    .for_rate(rate_hz)
 }
 
 /// An estimator model.
@@ -142,7 +144,7 @@ impl ModelEstimator {
                 est: Box::new(StickSlipEstimator::new(
                     structure,
                     rate_hz,
-                    stick_slip_config(model),
+                    stick_slip_config(model, rate_hz),
                 )?),
                 events: model == Model::StickSlip,
             },

@@ -72,6 +72,8 @@ pub const GOAL_BOARD_RAM_BYTES: u64 = 8 * 1024;
 /// The detector of a scene as the firmware builds it (see `firmware/build.rs`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DetectorSetup {
+    /// The scene's sample rate (Hz).
+    pub rate_hz: f64,
     /// `DetectorConfig::for_noise(disp_noise_rms_m, rate_hz)?.with_friction(μs, μ)` (the
     /// settings of `host-sim run` too): the rectangular and fixed-base models' detector.
     pub config: DetectorConfig,
@@ -127,6 +129,7 @@ impl DetectorSetup {
             );
         }
         Ok(Self {
+            rate_hz: scene.rate_hz,
             config,
             phase,
             ring,
@@ -200,7 +203,7 @@ impl DetectorSetup {
             }
         }
         let cfg = m.message.split_once("config=").map(|(_, c)| c.trim());
-        let want = format!("{:?}", stick_slip_config(model));
+        let want = format!("{:?}", stick_slip_config(model, self.rate_hz));
         if cfg != Some(want.as_str()) {
             bail!("the firmware's stick-slip settings `{cfg:?}` differ from the host's `{want}`");
         }
@@ -260,7 +263,7 @@ impl HostEstimator {
                     StickSlipEstimator::with_history(
                         &scene.structure,
                         scene.rate_hz,
-                        stick_slip_config(model),
+                        stick_slip_config(model, scene.rate_hz),
                         setup.history,
                     )
                     .map_err(|e| anyhow!("the stick-slip estimator rejects the scene: {e:?}"))?,
@@ -1033,7 +1036,7 @@ impl Reference {
                     StickSlipEstimator::with_history(
                         &scene.structure,
                         scene.rate_hz,
-                        stick_slip_config(model),
+                        stick_slip_config(model, scene.rate_hz),
                         setup.history,
                     )
                     .map_err(|e| {
