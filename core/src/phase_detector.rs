@@ -18,8 +18,11 @@
 //! (extrapolated linearly); a slip start by a least-squares fit of the ramp (or jump) model to the
 //! samples around the first one above the threshold, on a one-sample grid of trial times refined
 //! by golden-section search. Times are relative to the current sample (exact for any run length).
-//! Events are reported late (a stick or a reversal one sample, a slip start `confirm_samples`)
-//! with their age in samples, which the estimator back-dates. Fixed-size ring of `N` samples; no
+//! Events are reported late (a stick or a reversal one sample, a slip start `confirm_samples`, a
+//! stick without a jump `stall_samples` or more, at most [`PhaseDetectorConfig::max_age_samples`])
+//! with their age in samples, which the estimator back-dates; an event is never earlier than the
+//! one before it (a stick and the slip start after it can coincide). Non-finite or overflowing
+//! input never panics: the velocity is then held at zero and events are timed mid-interval. Fixed-size ring of `N` samples; no
 //! heap, no panics.
 //!
 //! Compared with the displacement detector ([`crate::reversal_detector`]), which must wait for the
@@ -35,6 +38,10 @@ const JUMP_THRESHOLDS: f32 = 3.0;
 
 /// The stall rule's velocity bound: this many times `stall_samples` × threshold (m/s² × samples).
 const STALL_VELOCITY: f32 = 8.0;
+
+/// A sliding base with |s̈| below the threshold for this many times the longest back-dating is
+/// declared stuck whatever its integrated velocity (the stick then back-dated to that limit).
+const STALL_FORCE: usize = 8;
 
 /// … plus this many times the magnitude of s̈'s last second difference.
 const CURVATURES: f32 = 4.0;
@@ -84,12 +91,18 @@ impl PhaseDetectorConfig {
 
     /// The ring the detector needs (a power of two holding the slip start's fit window).
     pub fn min_ring(&self) -> usize {
-        (self.search_samples + self.confirm_samples + 2).next_power_of_two()
+        self.search_samples
+            .saturating_add(self.confirm_samples)
+            .saturating_add(2)
+            .checked_next_power_of_two()
+            .unwrap_or(usize::MAX)
     }
 
     /// The oldest event this detector reports (samples): a slip start's search window.
     pub fn max_age_samples(&self) -> usize {
-        self.search_samples + self.confirm_samples + 1
+        self.search_samples
+            .saturating_add(self.confirm_samples)
+            .saturating_add(1)
     }
 }
 
@@ -212,14 +225,15 @@ impl<const N: usize> PhaseDetector<N> {
             0
         };
         let m = self.cfg.stall_samples;
-        if self.in_band >= m
-            && (self.v_held || libm::fabsf(self.v) <= STALL_VELOCITY * m as f32 * thr + self.v_unc)
-        {
+        if self.in_band >= m && self.stalled(m, thr) {
+            let cap = self.cfg.max_age_samples();
             // s̈ has stayed at zero for `stall_samples` with no jump seen (a stick too gentle or
             // too noisy for one), and the velocity is about zero: the base sticks, since the
             // first sample of the run.
-            // (Capped at the longest back-dating the detector promises.)
-            let n = self.in_band.min(self.cfg.max_age_samples());
+            // (Capped at the longest back-dating the detector promises; after `STALL_FORCE`
+            // times that in the band the base is declared stuck whatever the velocity says:
+            // the integrated velocity can be off for good, e.g. after overflowing input.)
+            let n = self.in_band.min(cap.saturating_sub(1)).max(1);
             let age = (n - 1) as f32 + 0.5;
             self.direction = 0;
             self.v = 0.0;
@@ -233,7 +247,8 @@ impl<const N: usize> PhaseDetector<N> {
         if !(jump || (crossed && stuck && !self.v_held)) {
             if crossed {
                 // v reached zero but s̈ shows no event: the integrated velocity is off (by the
-                // jump at the slip start, known to a sample only). Hold it at zero.
+                // jump at the slip start, known to a sample only). Hold it at zero. (A velocity
+                // that overflowed is reset by the next event, or by the forced stall.)
                 self.v = 0.0;
                 self.v_held = true;
             } else {
@@ -254,7 +269,7 @@ impl<const N: usize> PhaseDetector<N> {
             }
             if (0.0..=1.0).contains(&tau) {
                 tau
-            } else if jump {
+            } else if jump || !tau.is_finite() {
                 0.5
             } else {
                 tau.clamp(0.0, 1.0)
@@ -287,15 +302,22 @@ impl<const N: usize> PhaseDetector<N> {
         None
     }
 
+    /// The stall rule (|s̈| in the band for `m` ≥ `stall_samples` samples): the integrated
+    /// velocity is held or about zero, or the band has lasted `STALL_FORCE` × the longest
+    /// back-dating.
+    #[cold]
+    fn stalled(&self, m: usize, thr: f32) -> bool {
+        self.v_held
+            || libm::fabsf(self.v) <= STALL_VELOCITY * m as f32 * thr + self.v_unc
+            || self.in_band >= STALL_FORCE.saturating_mul(self.cfg.max_age_samples())
+    }
+
     /// A stuck sample: watch for s̈ leaving zero; confirm and time the slip start.
     fn stuck(&mut self, k: u64, a: f32) -> Option<SlipEvent> {
         let thr = self.cfg.threshold_m_s2;
         let Some(p) = self.pending else {
             if libm::fabsf(a) >= thr {
                 self.pending = Some(k);
-                if self.cfg.confirm_samples <= 1 {
-                    return self.slip_start(k, k);
-                }
             }
             return None;
         };
@@ -331,6 +353,11 @@ impl<const N: usize> PhaseDetector<N> {
             rel(lo, k)
         };
         let t_max = rel(p, k);
+        let t_min = if t_min.is_finite() {
+            t_min.min(t_max)
+        } else {
+            rel(lo, k)
+        };
         let a = |i: u64| self.at(i);
         let tb = if self.cfg.jump_breakaway {
             // s̈ = (J + S·u)·[u > 0], u = t − t_b: the residual is constant between samples, so
@@ -357,7 +384,8 @@ impl<const N: usize> PhaseDetector<N> {
             };
             let first = libm::floorf(t_min) + 0.5;
             let (best, _) = grid_min(&resid, (first, t_max), 1.0);
-            best.clamp(t_min, t_max)
+            // (max/min: NaN-safe.)
+            best.max(t_min).min(t_max)
         } else {
             // s̈ = S·u^q·[u > 0], q = 1 (a linear crossing) or 2 (a tangent one).
             let resid_q = |tb: f32, q: i32| {
@@ -644,5 +672,52 @@ mod tests {
             }
         }
         assert_eq!(n, [20, 0, 20]);
+    }
+
+    /// Overflowing input (the integrated velocity becomes infinite) and a lone breakaway
+    /// followed by silence: no panic, finite non-negative ages in order, and the detector ends
+    /// stuck.
+    #[test]
+    fn overflowing_input_and_silence() {
+        let cfg = PhaseDetectorConfig::for_noise(5e-3)
+            .unwrap()
+            .with_friction(0.25, 0.2);
+        let mut d = PhaseDetector::<64>::new(cfg).unwrap();
+        let input = [
+            0.0,
+            0.0,
+            -3e38,
+            1.0,
+            1e38,
+            f32::NAN,
+            1.0,
+            0.0,
+            0.0,
+            0.0,
+            1.0,
+            1.0,
+            1.0,
+            1.0,
+            1.0,
+        ];
+        let mut last = f64::NEG_INFINITY;
+        for k in 0..2000u64 {
+            let x = input.get(k as usize).copied().unwrap_or(0.0);
+            if let Some(e) = d.process(x) {
+                let age = e.age_samples();
+                assert!(age.is_finite() && age >= 0.0, "{e:?} at {k}");
+                let t = k as f64 - age as f64;
+                assert!(t >= last, "{e:?} at {k} before {last}");
+                last = t;
+            }
+        }
+        assert_eq!(d.direction(), 0);
+        // A step of s̈ (a jump breakaway), then exact zeros: stuck again.
+        let mut d =
+            PhaseDetector::<64>::new(PhaseDetectorConfig::for_noise(5e-3).unwrap()).unwrap();
+        for k in 0..1000u64 {
+            d.process(if (3..9).contains(&k) { 1.0 } else { 0.0 });
+        }
+        assert_eq!(d.direction(), 0);
     }
 }

@@ -39,7 +39,8 @@
 //! times (the estimator's situation; the truth switches on its own state) is parametrically
 //! unstable for the estimator's errors: undamped, they grow ~20/s. While the base sticks, every
 //! interval therefore starts from the state corrected towards the measured top acceleration,
-//! z += K·Δt·(ü1_pred − ü1_meas), with K giving the error a double pole at −b·p
+//! z += G·(ü1_pred − ü1_meas), with G giving the stuck error map a double eigenvalue
+//! e^(−b·p·Δt) (critically damped error dynamics at b·p, exact in discrete time)
 //! ([`StickSlipConfig::observer_bandwidth`] = b, default 2; 0: open loop); the stored state stays
 //! the prediction, so a sample's prediction never uses its own measurement.
 //!
@@ -172,7 +173,10 @@ const MODE_COLD: u8 = 2;
 pub struct StickSlipConfig {
     /// Identify μ online.
     pub identify_mu: bool,
-    /// Let the model adopt the identified μ (at the start of each sliding episode).
+    /// Let the model adopt the identified μ (at the start of each sliding episode, once
+    /// `min_samples` updates are in and μ̂ is within a factor of 2 of the structure's μ). A late
+    /// event re-simulates the history with the μ in use now, also for intervals before an
+    /// adoption within the history.
     pub use_identified_mu: bool,
     /// RLS forgetting factor λ in (0, 1] per sample (λ^n per update of a block of n samples).
     pub forgetting: f64,
@@ -184,7 +188,8 @@ pub struct StickSlipConfig {
     /// Measurement correction while the base sticks, as the observer's bandwidth in units of the
     /// natural circular frequency p (0: open loop): each stuck sample moves the state towards the
     /// measured top acceleration so that, stuck, the state error decays like a critically damped
-    /// oscillator at this bandwidth (see the module documentation). It bounds the growth of
+    /// oscillator at this bandwidth (the discrete map's double eigenvalue e^(−b·p·Δt); see the
+    /// module documentation). It bounds the growth of
     /// errors that switching between the sliding and the stuck dynamics at given times pumps up
     /// (undamped structures: ~20/s).
     pub observer_bandwidth: f64,
@@ -209,7 +214,13 @@ impl StickSlipConfig {
     /// 10 kHz, 3 at 1 kHz: a block must fit in the sliding stretches between events, which last
     /// a few ms to tens of ms) and `min_samples` updates covering 2048 samples.
     pub fn for_rate(self, sample_rate_hz: f64) -> Self {
-        let n = libm::floor(sample_rate_hz * 3.2e-3).clamp(1.0, MAX_IDENTIFY_EVERY as f64) as u32;
+        let blocks = libm::floor(sample_rate_hz * 3.2e-3);
+        // (A non-finite or non-positive rate: blocks of 1; the constructor rejects the rate.)
+        let n = if blocks >= 1.0 {
+            (blocks.min(MAX_IDENTIFY_EVERY as f64) as u32).max(1)
+        } else {
+            1
+        };
         Self {
             identify_every: n,
             min_samples: 2048u32.div_ceil(n),
@@ -228,7 +239,7 @@ impl Default for StickSlipConfig {
 /// (an event `a` samples old lies in the interval `⌊a⌋ + 1` samples back, whose start sample must
 /// still be kept).
 pub const fn history_for_age(max_age_samples: usize) -> usize {
-    max_age_samples + 2
+    max_age_samples.saturating_add(2)
 }
 
 /// The storage (`H`) that makes the steady state of a history of `history` samples cheapest: the
@@ -241,7 +252,7 @@ pub const fn storage_for(history: usize, identify_every: u32) -> usize {
     } else {
         identify_every as usize
     };
-    history.div_ceil(n) * n + 1
+    history.div_ceil(n).saturating_mul(n).saturating_add(1)
 }
 
 /// The identified friction coefficient.
@@ -268,6 +279,25 @@ struct Rls<T> {
     e2: T,
     alpha: T,
     n: u32,
+}
+
+impl<T: Real> Rls<T> {
+    /// One update with regressor `phi` and target `target`; an update that would leave the
+    /// information or the estimate non-finite (an absurd measurement) is skipped, so one bad
+    /// sample cannot poison μ̂ for good.
+    #[inline(always)]
+    fn update(&mut self, phi: T, target: T) {
+        let e = target - self.mu * phi;
+        let a = self.lambda * self.a + phi * phi;
+        let b = self.lambda * self.b + phi * target;
+        let mu = b / a;
+        let e2 = self.e2 + (e * e - self.e2) * self.alpha;
+        // (b non-finite makes μ so too.)
+        if a.is_finite() && mu.is_finite() && e2.is_finite() {
+            (self.a, self.b, self.mu, self.e2) = (a, b, mu, e2);
+            self.n = self.n.saturating_add(1);
+        }
+    }
 }
 
 /// What the identification knows about a block of intervals that is not final yet: one bit
@@ -575,20 +605,34 @@ pub struct StickSlipEstimator<T: Real, M: Transcendentals<T>, const H: usize> {
 }
 
 /// The stuck-phase observer's per-sample gain for a bandwidth of `b`·p, in the estimator's state
-/// coordinates (ü1, pδ'). With z = (p²δ, pδ') the stuck dynamics are ż = [[0, p], [−p, −2ξp]]z
-/// (+ input) and the measurement ü1 = −(z0 + 2ξz1); the correction ż += K·(ü1_pred − ü1_meas)
-/// gives the error dynamics the characteristic polynomial λ² + (K0 + 2ξp)λ + p(p + K1) + 2ξpK0,
-/// a double root at −bp for K0 = 2bp − 2ξp, K1 = ((bp)² − 2ξpK0)/p − p; per sample K·Δt
-/// (forward Euler: bp·Δt ≪ 1 at usual rates), mapped to (ü1, pδ'): Δü1 = −(Δz0 + 2ξΔz1).
-fn observer_gain<T: Real>(c: &StickSlipCoefficients<T>, b: f64) -> [T; 2] {
-    if b <= 0.0 {
+/// coordinates (ü1, pδ'). In z = (p²δ, pδ') a stuck interval maps the error e by the fixed-base
+/// transition Φ; the measurement ü1 = c·z, c = (−1, −2ξ); the correction z += G·(ü1_pred −
+/// ü1_meas) at the interval's start makes it e ← Φ(I + G·c)e. G is placed so that this map has a
+/// double eigenvalue ρ = e^(−b·p·Δt) (the exact discrete counterpart of critically damped error
+/// dynamics at b·p, stable at any sampling): trace 2ρ and determinant ρ², i.e.
+/// c·G = ρ²/det Φ − 1 and c·Φ·G = 2ρ − tr Φ. Mapped to (ü1, pδ'): Δü1 = −(ΔG0 + 2ξΔG1).
+fn observer_gain<T: Real, M: Transcendentals<T>>(c: &StickSlipCoefficients<T>, b: f64) -> [T; 2] {
+    if b.is_nan() || b <= 0.0 {
         return [T::ZERO; 2];
     }
     let (p, two_xi, dt) = (c.p.to_f64(), c.two_xi.to_f64(), c.dt.to_f64());
-    let w = b * p;
-    let k0 = 2.0 * w - two_xi * p;
-    let k1 = (w * w - two_xi * p * k0) / p - p;
-    let (g0, g1) = (k0 * dt, k1 * dt);
+    let f = c.kf.eval::<M>(c.dt);
+    let (ecp, es, ecm) = (f.ecp.to_f64(), f.es.to_f64(), f.ecm.to_f64());
+    let phi = [ecp, p * es, -p * es, ecm];
+    let rho = libm::exp(-b * p * dt);
+    let (tr, det_phi) = (phi[0] + phi[3], phi[0] * phi[3] - phi[1] * phi[2]);
+    let cv = [-1.0, -two_xi];
+    let cphi = [
+        cv[0] * phi[0] + cv[1] * phi[2],
+        cv[0] * phi[1] + cv[1] * phi[3],
+    ];
+    let rhs = [rho * rho / det_phi - 1.0, 2.0 * rho - tr];
+    let det = cv[0] * cphi[1] - cv[1] * cphi[0];
+    let g0 = (rhs[0] * cphi[1] - cv[1] * rhs[1]) / det;
+    let g1 = (cv[0] * rhs[1] - cphi[0] * rhs[0]) / det;
+    if !(g0.is_finite() && g1.is_finite()) {
+        return [T::ZERO; 2];
+    }
     [T::from_f64(-(g0 + two_xi * g1)), T::from_f64(g1)]
 }
 
@@ -731,7 +775,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
             cfg.observer_bandwidth >= 0.0 && cfg.observer_bandwidth <= 10.0,
             "observer bandwidth in [0, 10] × p",
         )?;
-        let gain = observer_gain(&c, cfg.observer_bandwidth);
+        let gain = observer_gain::<T, M>(&c, cfg.observer_bandwidth);
         let n = cfg.identify_every;
         // The n-step sliding maps, composed in f64 from the per-sample ones.
         let per_sample = (c.phi_s.map(T::to_f64), c.force_s.map(T::to_f64));
@@ -1498,13 +1542,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
             id.zu = zu;
             // ü1 = −(z0 + 2ξ·z1) = w0: φ = w0 of z_u, the target y − w0 of z_h.
             let (phi, target) = (zu[0], yd - zh[0]);
-            let r = &mut id.rls;
-            let e = target - r.mu * phi;
-            r.a = r.lambda * r.a + phi * phi;
-            r.b = r.lambda * r.b + phi * target;
-            r.mu = r.b / r.a;
-            r.e2 = r.e2 + (e * e - r.e2) * r.alpha;
-            r.n = r.n.saturating_add(1);
+            id.rls.update(phi, target);
         } else {
             self.identify_other(sd);
         }
@@ -1561,13 +1599,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
             }
             if yd.is_finite() {
                 let (phi, target) = (id.zu[0], yd - id.zh[0]);
-                let r = &mut id.rls;
-                let e = target - r.mu * phi;
-                r.a = r.lambda * r.a + phi * phi;
-                r.b = r.lambda * r.b + phi * target;
-                r.mu = r.b / r.a;
-                r.e2 = r.e2 + (e * e - r.e2) * r.alpha;
-                r.n = r.n.saturating_add(1);
+                id.rls.update(phi, target);
             }
         } else if b.end != 0 {
             // An episode starts at the block's end.
@@ -1581,8 +1613,13 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
     /// A sliding episode starts at state `z`: z = z_h + μ·z_u with z_u = 0; the model adopts
     /// μ̂ if so set and there are enough samples.
     fn start_episode(&mut self, z: [T; 2]) {
-        if self.cfg.use_identified_mu && self.id.rls.n >= self.cfg.min_samples {
-            self.mu_use = self.id.rls.mu;
+        // Adopted only if plausible: within a factor of 2 of the structure's μ (a μ̂ outside
+        // that range means a wrong structure or bad measurements, not a friction estimate).
+        let mu_hat = self.id.rls.mu;
+        let plausible =
+            mu_hat >= self.c.mu * T::from_f64(0.5) && mu_hat <= self.c.mu * T::from_f64(2.0);
+        if self.cfg.use_identified_mu && self.id.rls.n >= self.cfg.min_samples && plausible {
+            self.mu_use = mu_hat;
             self.gmu = self.c.g * self.mu_use;
             if self.mode == MODE_SLIDE {
                 self.set_drive();
@@ -1982,5 +2019,67 @@ mod tests {
                 check_identification::<64>(history, every, rate, &mut rnd);
             }
         }
+    }
+
+    /// The stuck-phase observer: an error injected into the state (10 ms of a wrong table
+    /// acceleration) decays like critically damped dynamics at b·p, (1 + b·p·t)·e^(−b·p·t),
+    /// whatever the damping, at fine and at coarse sampling; the measured top acceleration is an
+    /// open-loop estimator's prediction (exact for the same model).
+    #[test]
+    fn the_observer_error_decays_at_its_bandwidth() {
+        for (xi, rate, b) in [
+            (0.0, 1e4, 2.0),
+            (0.05, 1e4, 2.0),
+            (0.9, 1e4, 2.0),
+            (0.3, 1e3, 10.0),
+            (0.0, 200.0, 10.0),
+        ] {
+            let s = structure(0.2, xi);
+            let open = StickSlipConfig {
+                identify_mu: false,
+                observer_bandwidth: 0.0,
+                ..StickSlipConfig::DEFAULT
+            };
+            let obs = StickSlipConfig {
+                observer_bandwidth: b,
+                ..open
+            };
+            let mut reference = StickSlipEstimator::<f64, Libm, 8>::new(&s, rate, open).unwrap();
+            let mut est = StickSlipEstimator::<f64, Libm, 8>::new(&s, rate, obs).unwrap();
+            let w = b * s.p();
+            let dt = 1.0 / rate;
+            let inject = (0.01 * rate).ceil() as u64;
+            let (mut e0, mut worst) = (0.0f64, 0.0f64);
+            for k in 0..(inject + (12.0 / (w * dt)) as u64) {
+                let u = (2.0 * core::f64::consts::PI * 3.0 * k as f64 * dt).sin();
+                let wrong = if k < inject { u + 1.0 } else { u };
+                let y = reference.update(u, f64::NAN);
+                let pred = est.update(wrong, y);
+                let err = (pred - y).abs();
+                if k == inject {
+                    e0 = err.max(1e-12);
+                }
+                if k > inject {
+                    let t = (k - inject) as f64 * dt;
+                    let bound = 20.0 * (1.0 + w * t) * libm::exp(-w * t);
+                    worst = worst.max(err / e0 / bound);
+                }
+            }
+            std::println!("xi {xi} rate {rate} b {b}: worst {:.3} of the bound", worst);
+            // Measured: ≤ 0.13 of the bound at 10 kHz, 0.50 at b·p·Δt = 0.44 (1 kHz, b = 10),
+            // where the discrete double eigenvalue's transient is larger than the continuous
+            // one; with the gain of the continuous design this case diverged.
+            assert!(worst < 1.0, "xi {xi} rate {rate} b {b}: {worst}");
+        }
+    }
+
+    #[test]
+    fn for_rate_takes_any_rate() {
+        for r in [f64::NAN, -1.0, 0.0, 1.0, 1e3, 1e4, 1e9, f64::INFINITY] {
+            let c = StickSlipConfig::DEFAULT.for_rate(r);
+            assert!((1..=MAX_IDENTIFY_EVERY).contains(&c.identify_every), "{r}");
+        }
+        assert_eq!(StickSlipConfig::DEFAULT.for_rate(1e4).identify_every, 32);
+        assert_eq!(StickSlipConfig::DEFAULT.for_rate(1e3).identify_every, 3);
     }
 }

@@ -144,7 +144,7 @@ fn check_stick_slip(v: &Value, samples: u64) {
     // The f32 estimator against the f64 one on the same detected events and inputs (measured
     // ≤ 5e-6 gμ).
     assert!(num(v, "max_err_vs_reference_gmu") < 1e-4, "{v}");
-    // Measured (docs/PERFORMANCE.md): 38.8 per sliding sample with the μ identification, 60.1
+    // Measured (docs/PERFORMANCE.md): 39.4 per sliding sample with the μ identification, 60.1
     // stuck (with the observer's correction; 49 without), 34 sliding without the
     // identification, ~870 per event at age 0.5.
     let ips = num(v, "instructions_per_sample");
