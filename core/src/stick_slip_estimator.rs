@@ -649,6 +649,26 @@ fn correct<T: Real>(gain: [T; 2], z: [T; 2], y: T) -> [T; 2] {
     }
 }
 
+/// The fixed-base (stuck) map over one whole interval, table accelerations `u0` → `u1`.
+#[inline(always)]
+fn stuck_map<T: Real>(c: &StickSlipCoefficients<T>, z: [T; 2], u0: T, u1: T) -> [T; 2] {
+    let w = mat(&c.phi_f, z);
+    let du = u1 - u0;
+    [
+        z[0] + (w[0] + c.b0[0] * u0 + c.b1[0] * du),
+        z[1] + (w[1] + c.b0[1] * u0 + c.b1[1] * du),
+    ]
+}
+
+/// The sliding map over one whole interval: increment map `a` (Φs − I), forcing `d`.
+#[inline(always)]
+fn sliding_map<T: Real>(a: &[T; 4], d: [T; 2], z: [T; 2]) -> [T; 2] {
+    [
+        z[0] + (d[0] + a[0] * z[0] + a[1] * z[1]),
+        z[1] + (d[1] + a[2] * z[0] + a[3] * z[1]),
+    ]
+}
+
 #[inline(always)]
 fn mat<T: Real>(m: &[T; 4], z: [T; 2]) -> [T; 2] {
     [m[0] * z[0] + m[1] * z[1], m[2] * z[0] + m[3] * z[1]]
@@ -997,26 +1017,14 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
     /// The fixed-base (stuck) map over one whole interval.
     #[inline(always)]
     fn step_stuck(&self, z: [T; 2], u0: T, u1: T) -> [T; 2] {
-        let c = &self.c;
-        let w = mat(&c.phi_f, z);
-        let du = u1 - u0;
-        [
-            z[0] + (w[0] + c.b0[0] * u0 + c.b1[0] * du),
-            z[1] + (w[1] + c.b0[1] * u0 + c.b1[1] * du),
-        ]
+        stuck_map(&self.c, z, u0, u1)
     }
 
     /// The sliding map over one whole interval with the friction force `f` = ±g·μ.
     #[inline(always)]
     fn step_sliding(&self, z: [T; 2], f: T) -> [T; 2] {
-        let (a, d) = (
-            &self.c.phi_s,
-            [f * self.c.force_s[0], f * self.c.force_s[1]],
-        );
-        [
-            z[0] + (d[0] + a[0] * z[0] + a[1] * z[1]),
-            z[1] + (d[1] + a[2] * z[0] + a[3] * z[1]),
-        ]
+        let d = [f * self.c.force_s[0], f * self.c.force_s[1]];
+        sliding_map(&self.c.phi_s, d, z)
     }
 
     /// State at the end of an interval (phases `iv`, switch fractions `fr`) from its start, the
@@ -1062,11 +1070,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
             if let (Some([prev, cur, ..]), true) =
                 (self.slots.get_mut(at..), table_accel.is_finite())
             {
-                let (z, a, d) = (prev.z, &self.c.phi_s, &self.drive);
-                let z = [
-                    z[0] + (d[0] + a[0] * z[0] + a[1] * z[1]),
-                    z[1] + (d[1] + a[2] * z[0] + a[3] * z[1]),
-                ];
+                let z = sliding_map(&self.c.phi_s, self.drive, prev.z);
                 *cur = Slot {
                     u: table_accel,
                     y: measured_top,
@@ -1082,14 +1086,8 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
             if let (Some([prev, cur, ..]), true) =
                 (self.slots.get_mut(at..), table_accel.is_finite())
             {
-                let c = &self.c;
                 let z = correct(self.gain, prev.z, prev.y);
-                let (u0, du) = (prev.u, table_accel - prev.u);
-                let w = mat(&c.phi_f, z);
-                let z = [
-                    z[0] + (w[0] + c.b0[0] * u0 + c.b1[0] * du),
-                    z[1] + (w[1] + c.b0[1] * u0 + c.b1[1] * du),
-                ];
+                let z = stuck_map(&self.c, z, prev.u, table_accel);
                 self.at = at + 1;
                 cur.z = z;
                 cur.y = measured_top;
@@ -1113,14 +1111,8 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
             if let (Some([prev, cur, ..]), true) =
                 (self.slots.get_mut(at..), table_accel.is_finite())
             {
-                let c = &self.c;
                 let z = correct(self.gain, prev.z, prev.y);
-                let (u0, du) = (prev.u, table_accel - prev.u);
-                let w = mat(&c.phi_f, z);
-                let z = [
-                    z[0] + (w[0] + c.b0[0] * u0 + c.b1[0] * du),
-                    z[1] + (w[1] + c.b0[1] * u0 + c.b1[1] * du),
-                ];
+                let z = stuck_map(&self.c, z, prev.u, table_accel);
                 *cur = Slot {
                     u: table_accel,
                     y: measured_top,
@@ -1145,11 +1137,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
             if let (Some([prev, cur, ..]), true) =
                 (self.slots.get_mut(at..), table_accel.is_finite())
             {
-                let (z, a, d) = (prev.z, &self.c.phi_s, &self.drive);
-                let z = [
-                    z[0] + (d[0] + a[0] * z[0] + a[1] * z[1]),
-                    z[1] + (d[1] + a[2] * z[0] + a[3] * z[1]),
-                ];
+                let z = sliding_map(&self.c.phi_s, self.drive, prev.z);
                 *cur = Slot {
                     u: table_accel,
                     y: measured_top,

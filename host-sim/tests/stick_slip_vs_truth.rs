@@ -19,17 +19,9 @@ fn structure(m1: f64, m2: f64, f_hz: f64, xi: f64, mu: f64, g: f64) -> Structure
     .unwrap()
 }
 
-/// Max |prediction − truth| / peak |truth| with every event pushed `lag` samples late.
-fn run<T: Real, M: Transcendentals<T>>(
-    s: &Structure,
-    table: &TableMotion,
-    mu_s: f64,
-    duration: f64,
-    rate: f64,
-    lag: f64,
-) -> (f64, usize) {
-    let truth = simulate(&TruthInput::new(s, table, duration).with_static_friction(mu_s)).unwrap();
-    let events: Vec<(f64, i8)> = truth
+/// The truth's phase changes: (time, phase after it: 0 stuck, ±1 friction level).
+fn phase_changes(truth: &host_sim::truth::Truth) -> Vec<(f64, i8)> {
+    truth
         .events()
         .iter()
         .map(|e| {
@@ -40,7 +32,20 @@ fn run<T: Real, M: Transcendentals<T>>(
             };
             (e.time_s, phase)
         })
-        .collect();
+        .collect()
+}
+
+/// Max |prediction − truth| / peak |truth| with every event pushed `lag` samples late.
+fn run<T: Real, M: Transcendentals<T>>(
+    s: &Structure,
+    table: &TableMotion,
+    mu_s: f64,
+    duration: f64,
+    rate: f64,
+    lag: f64,
+) -> (f64, usize) {
+    let truth = simulate(&TruthInput::new(s, table, duration).with_static_friction(mu_s)).unwrap();
+    let events = phase_changes(&truth);
     let cfg = StickSlipConfig {
         identify_mu: false,
         ..StickSlipConfig::default()
@@ -232,18 +237,7 @@ fn identifies_the_friction_coefficient() {
 fn observed(s: &Structure, table: &TableMotion, duration: f64, bandwidth: f64) -> (f64, f64) {
     let rate = 1e4;
     let truth = simulate(&TruthInput::new(s, table, duration)).unwrap();
-    let events: Vec<(f64, i8)> = truth
-        .events()
-        .iter()
-        .map(|e| {
-            let phase = match e.kind {
-                EventKind::SlipStart { direction } => -(direction.sign() as i8),
-                EventKind::Reversal { new_direction } => -(new_direction.sign() as i8),
-                EventKind::Stick => 0,
-            };
-            (e.time_s, phase)
-        })
-        .collect();
+    let events = phase_changes(&truth);
     let cfg = StickSlipConfig {
         identify_mu: false,
         observer_bandwidth: bandwidth,
