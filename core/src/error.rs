@@ -35,6 +35,8 @@ pub enum Param {
     SampleRate,
     /// Sub-sample offset or back-dating delay of an event.
     EventTime,
+    /// The length of a block of samples (its slices must be equally long).
+    BlockLength,
 }
 
 impl Param {
@@ -56,6 +58,7 @@ impl Param {
             Param::ReversalSign => "reversal sign",
             Param::SampleRate => "sample rate",
             Param::EventTime => "event time",
+            Param::BlockLength => "block length",
         }
     }
 }

@@ -565,6 +565,10 @@ pub struct StickSlipEstimator<T: Real, M: Transcendentals<T>, const H: usize> {
     drive: [T; 2],
     /// Measurement correction of a stuck sample: the state += `gain`·(prediction − measured).
     gain: [T; 2],
+    /// The stuck interval's map with the correction (a finite measured top acceleration at its
+    /// start) and without.
+    closed: StuckMap<T>,
+    open: StuckMap<T>,
     c: StickSlipCoefficients<T>,
     /// [`MODE_SLIDE`], [`MODE_STUCK`] or [`MODE_COLD`]: how to step interval k − 1 → k.
     mode: u8,
@@ -649,15 +653,82 @@ fn correct<T: Real>(gain: [T; 2], z: [T; 2], y: T) -> [T; 2] {
     }
 }
 
-/// The fixed-base (stuck) map over one whole interval, table accelerations `u0` → `u1`.
+/// The fixed-base (stuck) map over one whole interval from the state `z` of its first sample
+/// (measured top acceleration `y0`), table accelerations `u0` → `u1`: with [`StuckMap::closed`]
+/// the observer's correction from `y0` included, with [`StuckMap::open`] (`y0` = 0) without.
 #[inline(always)]
-fn stuck_map<T: Real>(c: &StickSlipCoefficients<T>, z: [T; 2], u0: T, u1: T) -> [T; 2] {
-    let w = mat(&c.phi_f, z);
-    let du = u1 - u0;
+fn stuck_map<T: Real>(m: &StuckMap<T>, z: [T; 2], y0: T, u0: T, u1: T) -> [T; 2] {
     [
-        z[0] + (w[0] + c.b0[0] * u0 + c.b1[0] * du),
-        z[1] + (w[1] + c.b0[1] * u0 + c.b1[1] * du),
+        z[0] + (m.a[0] * z[0] + m.a[1] * z[1] + m.h[0] * y0 + m.b0[0] * u0 + m.b1[0] * u1),
+        z[1] + (m.a[2] * z[0] + m.a[3] * z[1] + m.h[1] * y0 + m.b0[1] * u0 + m.b1[1] * u1),
     ]
+}
+
+/// [`stuck_map`] with the observer's correction if `y0` is finite (`closed`), else without
+/// (`open`).
+#[inline(always)]
+fn stuck_step<T: Real>(
+    closed: &StuckMap<T>,
+    open: &StuckMap<T>,
+    z: [T; 2],
+    y0: T,
+    u0: T,
+    u1: T,
+) -> [T; 2] {
+    let (m, y0) = if y0.is_finite() {
+        (closed, y0)
+    } else {
+        (open, T::ZERO)
+    };
+    stuck_map(m, z, y0, u0, u1)
+}
+
+/// A stuck interval as one affine map in increment form: z ↦ z + A·z + h·y0 + b0·u0 + b1·u1
+/// (ten coefficients, few enough to stay in registers over a block of samples).
+#[derive(Debug, Clone, Copy)]
+struct StuckMap<T> {
+    a: [T; 4],
+    h: [T; 2],
+    b0: [T; 2],
+    b1: [T; 2],
+}
+
+impl<T: Real> StuckMap<T> {
+    /// Without the observer: Φf − I, and the piecewise-linear input b0·u0 + b1·(u1 − u0) as
+    /// (b0 − b1)·u0 + b1·u1.
+    fn open(c: &StickSlipCoefficients<T>) -> Self {
+        let (b0, b1) = (c.b0.map(T::to_f64), c.b1.map(T::to_f64));
+        Self {
+            a: c.phi_f,
+            h: [T::ZERO; 2],
+            b0: [T::from_f64(b0[0] - b1[0]), T::from_f64(b0[1] - b1[1])],
+            b1: c.b1,
+        }
+    }
+
+    /// With the observer's correction z += G·(z0 − y0) at the interval's start (gain `g`):
+    /// z + A(z + G(z0 − y0)) + G(z0 − y0) + … = z + (A + ΦG·e0ᵀ)z − ΦG·y0 + …, Φ = I + A
+    /// (composed in f64).
+    fn closed(c: &StickSlipCoefficients<T>, g: [T; 2]) -> Self {
+        let open = Self::open(c);
+        let a = c.phi_f.map(T::to_f64);
+        let g = g.map(T::to_f64);
+        // ΦG = G + A·G.
+        let pg = [
+            g[0] + (a[0] * g[0] + a[1] * g[1]),
+            g[1] + (a[2] * g[0] + a[3] * g[1]),
+        ];
+        Self {
+            a: [
+                T::from_f64(a[0] + pg[0]),
+                c.phi_f[1],
+                T::from_f64(a[2] + pg[1]),
+                c.phi_f[3],
+            ],
+            h: [T::from_f64(-pg[0]), T::from_f64(-pg[1])],
+            ..open
+        }
+    }
 }
 
 /// The sliding map over one whole interval: increment map `a` (Φs − I), forcing `d`.
@@ -832,6 +903,8 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
             stuck_until: 0,
             drive: [T::ZERO; 2],
             gain,
+            closed: StuckMap::closed(&c, gain),
+            open: StuckMap::open(&c),
             c,
             mode: MODE_COLD,
             phase: 0,
@@ -1014,10 +1087,11 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
         [-(z[0] + two_xi * z[1]), z[1]]
     }
 
-    /// The fixed-base (stuck) map over one whole interval.
+    /// The fixed-base (stuck) map over one whole interval from the state `z` of its first sample
+    /// and that sample's measured top acceleration `y0` (the observer's correction if finite).
     #[inline(always)]
-    fn step_stuck(&self, z: [T; 2], u0: T, u1: T) -> [T; 2] {
-        stuck_map(&self.c, z, u0, u1)
+    fn step_stuck(&self, z: [T; 2], y0: T, u0: T, u1: T) -> [T; 2] {
+        stuck_step(&self.closed, &self.open, z, y0, u0, u1)
     }
 
     /// The sliding map over one whole interval with the friction force `f` = ±g·μ.
@@ -1039,17 +1113,17 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
         fr: &[T; MAX_SWITCHES],
         (mu, gmu): (T, T),
     ) -> [T; 2] {
-        // A stuck start: from the corrected state.
-        let z = if iv & 3 == 0 {
-            correct(self.gain, z, y0)
-        } else {
-            z
-        };
         if packed::switches(iv) != 0 {
+            // A stuck start: from the corrected state.
+            let z = if iv & 3 == 0 {
+                correct(self.gain, z, y0)
+            } else {
+                z
+            };
             return self.step_switched(z, (u0, u1), iv, fr, mu);
         }
         match iv & 3 {
-            0 => self.step_stuck(z, u0, u1),
+            0 => self.step_stuck(z, y0, u0, u1),
             // (±1·g)·μ = ±(g·μ) exactly.
             1 => self.step_sliding(z, gmu),
             _ => self.step_sliding(z, -gmu),
@@ -1086,8 +1160,14 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
             if let (Some([prev, cur, ..]), true) =
                 (self.slots.get_mut(at..), table_accel.is_finite())
             {
-                let z = correct(self.gain, prev.z, prev.y);
-                let z = stuck_map(&self.c, z, prev.u, table_accel);
+                let z = stuck_step(
+                    &self.closed,
+                    &self.open,
+                    prev.z,
+                    prev.y,
+                    prev.u,
+                    table_accel,
+                );
                 self.at = at + 1;
                 cur.z = z;
                 cur.y = measured_top;
@@ -1097,6 +1177,109 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
         }
         unlikely();
         self.update_other(table_accel, measured_top)
+    }
+
+    /// [`Self::update`] of a block of samples: `out[i]` = the prediction of the sample with
+    /// `table[i]` and `top[i]`, bit for bit as that many calls of [`Self::update`] (events go
+    /// between blocks: [`Self::push_event`] before the sample it precedes), but cheaper: the
+    /// steady-state runs (plain sliding or plain stuck up to the next mark) keep the map's
+    /// coefficients and the state in registers. Lengths that differ are an error (nothing
+    /// processed).
+    pub fn update_block(&mut self, table: &[T], top: &[T], out: &mut [T]) -> Result<(), Error> {
+        if top.len() != table.len() || out.len() != table.len() {
+            return Err(Error::OutOfRange {
+                param: Param::BlockLength,
+                value: top.len().max(out.len()) as f64,
+                expected: "top and out as long as table",
+            });
+        }
+        let mut i = 0;
+        while let (Some(t), Some(y), Some(o)) = (table.get(i..), top.get(i..), out.get_mut(i..)) {
+            let (Some(&u0), Some(&y0)) = (t.first(), y.first()) else {
+                break;
+            };
+            let done = self.run(t, y, o);
+            if done == 0 {
+                if let Some(o0) = o.first_mut() {
+                    *o0 = self.update(u0, y0);
+                }
+                i += 1;
+            } else {
+                i += done;
+            }
+        }
+        Ok(())
+    }
+
+    /// The steady-state run at the start of a block ([`Self::update_block`]): plain sliding or
+    /// plain stuck samples up to the next mark (whose work, [`Self::at_mark`], it then does).
+    /// Returns how many samples it processed (0: the next one takes [`Self::update`]). The inputs are not tested sample by sample: a
+    /// non-finite one (table acceleration; or the measured top acceleration while stuck, which
+    /// enters the map) makes the run's sum of table accelerations or its final state
+    /// non-finite, and the run is then redone sample by sample by [`Self::update`].
+    #[inline(always)]
+    fn run(&mut self, table: &[T], top: &[T], out: &mut [T]) -> usize {
+        let at = self.at;
+        let sliding = at < self.fast_until;
+        let until = if sliding {
+            self.fast_until
+        } else {
+            self.stuck_until
+        };
+        if at >= until {
+            return 0;
+        }
+        // `until` = mark − 2: the run may store up to slot mark − 1, then the mark's work.
+        let m = (until + 1 - at).min(table.len());
+        let (a, drive, closed) = (self.c.phi_s, self.drive, self.closed);
+        let Some((prev, run)) = self
+            .slots
+            .get_mut(at..=at + m)
+            .and_then(|s| s.split_first_mut())
+        else {
+            return 0;
+        };
+        let samples = run
+            .iter_mut()
+            .zip(table.iter().zip(top))
+            .zip(out.iter_mut());
+        let finite = if sliding {
+            let (mut z, mut sum) = (prev.z, T::ZERO);
+            for ((s, (&u, &y)), o) in samples {
+                z = sliding_map(&a, drive, z);
+                *s = Slot { u, y, z };
+                *o = z[0];
+                sum += u;
+            }
+            sum.is_finite()
+        } else {
+            let Slot {
+                u: mut u0,
+                y: mut y0,
+                mut z,
+            } = *prev;
+            for ((s, (&u, &y)), o) in samples {
+                z = stuck_map(&closed, z, y0, u0, u);
+                *s = Slot { u, y, z };
+                *o = z[0];
+                (u0, y0) = (u, y);
+            }
+            z[0].is_finite() && z[1].is_finite()
+        };
+        if finite {
+            let last = at + m;
+            if last + 1 == self.mark {
+                self.at_mark(last + 1);
+            } else {
+                self.at = last;
+            }
+        } else {
+            unlikely();
+            for ((&u, &y), o) in table.iter().zip(top).zip(out.iter_mut()).take(m) {
+                *o = self.update(u, y);
+            }
+        }
+        m
     }
 
     /// [`Self::update`] in every other case: stuck with a mark after sample k (the fixed-base map)
@@ -1111,8 +1294,14 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
             if let (Some([prev, cur, ..]), true) =
                 (self.slots.get_mut(at..), table_accel.is_finite())
             {
-                let z = correct(self.gain, prev.z, prev.y);
-                let z = stuck_map(&self.c, z, prev.u, table_accel);
+                let z = stuck_step(
+                    &self.closed,
+                    &self.open,
+                    prev.z,
+                    prev.y,
+                    prev.u,
+                    table_accel,
+                );
                 *cur = Slot {
                     u: table_accel,
                     y: measured_top,
@@ -2069,5 +2258,90 @@ mod tests {
         }
         assert_eq!(StickSlipConfig::DEFAULT.for_rate(1e4).identify_every, 32);
         assert_eq!(StickSlipConfig::DEFAULT.for_rate(1e3).identify_every, 3);
+    }
+
+    /// Events of sample k in a repeating pattern: slip, stick (late), slip back, stick, slip.
+    fn pattern(k: u64) -> Option<(i8, f32)> {
+        match k % 1000 {
+            40 => Some((1, 0.25)),
+            300 => Some((0, 10.5)),
+            330 => Some((-1, 3.75)),
+            700 => Some((0, 20.0)),
+            705 => Some((1, 0.0)),
+            _ => None,
+        }
+    }
+
+    /// Inputs of sample k with a non-finite table acceleration now and then and a missing top
+    /// acceleration now and then.
+    fn gappy_inputs(k: u64) -> (f32, f32) {
+        let (u, y) = inputs(k);
+        let u = if k % 997 == 500 { f32::NAN } else { u };
+        let y = if k % 389 == 7 { f32::NAN } else { y };
+        (u, y)
+    }
+
+    fn block_vs_samples<const H: usize>(cfg: StickSlipConfig, history: usize, n: u64) {
+        let s = structure(0.2, 0.05);
+        let mut a =
+            StickSlipEstimator::<f32, F32Poly, H>::with_history(&s, 1e4, cfg, history).unwrap();
+        let mut b = a.clone();
+        let want: std::vec::Vec<u32> = (0..n)
+            .map(|k| {
+                if let Some((p, age)) = pattern(k) {
+                    a.push_event(p, age).unwrap();
+                }
+                let (u, y) = gappy_inputs(k);
+                a.update(u, y).to_bits()
+            })
+            .collect();
+        // Blocks of 1 to 40 samples, split where an event is pushed.
+        let mut got = std::vec::Vec::new();
+        let (mut k, mut len) = (0u64, 1u64);
+        while k < n {
+            if let Some((p, age)) = pattern(k) {
+                b.push_event(p, age).unwrap();
+            }
+            let end = (k + len).min(n);
+            let end = (k + 1..end).find(|&j| pattern(j).is_some()).unwrap_or(end);
+            let (table, top): (std::vec::Vec<f32>, std::vec::Vec<f32>) =
+                (k..end).map(gappy_inputs).unzip();
+            let mut out = std::vec![0.0f32; table.len()];
+            b.update_block(&table, &top, &mut out).unwrap();
+            got.extend(out.iter().map(|x| x.to_bits()));
+            k = end;
+            len = len * 7 % 41 + 1;
+        }
+        assert_eq!(got.len(), want.len());
+        let first = got.iter().zip(&want).position(|(g, w)| g != w);
+        assert_eq!(first, None, "first difference at sample {first:?}");
+        assert_eq!(a.mu_estimate(), b.mu_estimate());
+        assert!(a.mu_estimate().is_some());
+    }
+
+    #[test]
+    fn blocks_give_the_per_sample_predictions_bit_for_bit() {
+        let cfg = StickSlipConfig {
+            use_identified_mu: true,
+            min_samples: 50,
+            ..StickSlipConfig::DEFAULT
+        };
+        // The firmware's layout (storage = a multiple of the block plus one) and a plain one.
+        block_vs_samples::<{ storage_for(39, 32) }>(cfg, 39, 30_000);
+        block_vs_samples::<144>(cfg, 144, 30_000);
+        block_vs_samples::<64>(StickSlipConfig::DEFAULT.for_rate(1e3), 40, 30_000);
+    }
+
+    #[test]
+    fn blocks_of_unequal_lengths_are_an_error() {
+        let s = structure(0.2, 0.05);
+        let mut e =
+            StickSlipEstimator::<f32, F32Poly, 64>::new(&s, 1e4, StickSlipConfig::DEFAULT).unwrap();
+        let mut out = [0.0f32; 3];
+        let err = e.update_block(&[1.0; 3], &[1.0; 2], &mut out).unwrap_err();
+        assert_eq!(err.param(), Param::BlockLength);
+        assert!(e.update_block(&[1.0; 2], &[1.0; 2], &mut out).is_err());
+        assert_eq!(e.sample_index(), 0, "nothing processed");
+        assert!(e.update_block(&[], &[], &mut []).is_ok());
     }
 }
