@@ -593,6 +593,21 @@ pub struct Timings {
     pub compare_s: f64,
 }
 
+/// The estimator's steady-state instructions per sample as the pipeline runs it: in blocks
+/// (`update_block`) for the stick-slip estimator, the larger of its sliding and stuck samples;
+/// per sample for the rectangular recursion.
+fn steady_sample_instructions(ic: &qemu_runner::InstructionCounts) -> f64 {
+    match (
+        ic.instructions_per_sample_in_blocks,
+        ic.instructions_per_sample_stuck_in_blocks,
+    ) {
+        (Some(a), Some(b)) => a.max(b),
+        (None, Some(b)) => b,
+        (Some(a), None) => a,
+        (None, None) => ic.instructions_per_sample,
+    }
+}
+
 /// The goals and whether they are met.
 #[derive(Debug, Clone, Copy, Serialize)]
 pub struct Goals {
@@ -603,7 +618,7 @@ pub struct Goals {
     /// The model's goal of instructions per steady-state sample (rectangular 20, stick-slip and
     /// fixed-base 40).
     pub instructions_per_sample_goal: f64,
-    /// `instructions_per_sample` ≤ that goal.
+    /// `instructions_per_steady_sample` ≤ that goal.
     pub instructions_per_sample_le_goal: bool,
     /// Board image flash ≤ 32 KiB (false when the board image was not built).
     pub board_flash_le_32k: bool,
@@ -683,6 +698,18 @@ pub struct QemuReport {
     pub instructions_per_reversal: Option<f64>,
     /// Stick-slip and fixed-base models: instructions of a steady-state stuck update.
     pub instructions_per_sample_stuck: Option<f64>,
+    /// The estimator's steady-state cost as the firmware's pipeline runs it, which the goal is
+    /// checked on: rectangular `instructions_per_sample`; stick-slip the larger of the sliding
+    /// and the stuck sample in blocks; fixed-base the stuck sample in blocks.
+    pub instructions_per_steady_sample: f64,
+    /// Stick-slip and fixed-base models: the block size of the firmware's estimator
+    /// (`update_block`: the pipeline runs the estimator on batches of this many samples).
+    pub block_size: Option<u32>,
+    /// Stick-slip model: instructions per steady-state sliding sample (μ identified) in blocks
+    /// of `block_size` (as the pipeline runs it).
+    pub instructions_per_sample_in_blocks: Option<f64>,
+    /// Stick-slip and fixed-base models: instructions per steady-state stuck sample in blocks.
+    pub instructions_per_sample_stuck_in_blocks: Option<f64>,
     /// Stick-slip model: instructions of a steady-state sliding update without the μ
     /// identification (the prediction alone; the firmware identifies on every block of samples).
     pub instructions_per_sample_without_identification: Option<f64>,
@@ -945,11 +972,12 @@ pub fn run_scene_model(
 
     let equal = max_host <= HOST_TOLERANCE_GMU && mismatches == 0 && mu_equal;
     let goal = instructions_goal(model);
+    let steady = steady_sample_instructions(&ic);
     let goals = Goals {
         firmware_equals_host: equal,
         instructions_per_sample_le_20: ic.instructions_per_sample <= GOAL_INSTRUCTIONS_PER_SAMPLE,
         instructions_per_sample_goal: goal,
-        instructions_per_sample_le_goal: ic.instructions_per_sample <= goal,
+        instructions_per_sample_le_goal: steady <= goal,
         board_flash_le_32k: board.is_some_and(|b| b.0 <= GOAL_BOARD_FLASH_BYTES),
         board_ram_le_8k: board.is_some_and(|b| b.1 <= GOAL_BOARD_RAM_BYTES),
     };
@@ -985,6 +1013,10 @@ pub fn run_scene_model(
         instructions_per_sample: ic.instructions_per_sample,
         instructions_per_reversal: ic.instructions_per_reversal,
         instructions_per_sample_stuck: ic.instructions_per_sample_stuck,
+        instructions_per_steady_sample: steady,
+        block_size: ic.block_size,
+        instructions_per_sample_in_blocks: ic.instructions_per_sample_in_blocks,
+        instructions_per_sample_stuck_in_blocks: ic.instructions_per_sample_stuck_in_blocks,
         instructions_per_sample_without_identification: ic
             .instructions_per_sample_without_identification,
         instructions_per_event_max_age: ic.instructions_per_event_max_age,
@@ -1191,14 +1223,24 @@ pub fn print_report(r: &QemuReport, out: &mut impl Write) -> std::io::Result<()>
     writeln!(
         out,
         "  instructions (QEMU Cortex-M4F, SysTick, -icount shift=0): estimator {:.2}/sample [goal <= {}: {}]{}, +{}/event (age 0.5){}; detector {}/sample, +{}/reversal, +{}/stick and slip start; whole step {}/sample",
-        r.instructions_per_sample,
+        r.instructions_per_steady_sample,
         g.instructions_per_sample_goal,
         ok(g.instructions_per_sample_le_goal),
         match (
-            r.instructions_per_sample_stuck.filter(|_| r.model == "stick-slip"),
-            r.instructions_per_sample_without_identification,
+            r.block_size,
+            r.instructions_per_sample_in_blocks,
+            r.instructions_per_sample_stuck_in_blocks,
         ) {
-            (Some(s), Some(p)) => format!(" ({s:.2} stuck, {p:.2} sliding without the mu identification)"),
+            (Some(n), Some(a), Some(b)) => format!(
+                " (blocks of {n}: {a:.2} sliding, {b:.2} stuck; one update() at a time: {:.2} sliding, {} stuck, {} sliding without the mu identification)",
+                r.instructions_per_sample,
+                opt(r.instructions_per_sample_stuck, 2),
+                opt(r.instructions_per_sample_without_identification, 2)
+            ),
+            (Some(n), None, Some(_)) => format!(
+                " (stuck, blocks of {n}; one update() at a time: {:.2})",
+                r.instructions_per_sample
+            ),
             _ => String::new(),
         },
         opt(r.instructions_per_reversal, 1),

@@ -793,6 +793,14 @@ pub struct InstructionCounts {
     /// Stick-slip model: instructions of a steady-state sliding update without the μ
     /// identification (the prediction alone).
     pub instructions_per_sample_without_identification: Option<f64>,
+    /// Stick-slip and fixed-base models: the estimator's block size in the pipeline
+    /// (`update_block`, `icount block`).
+    pub block_size: Option<u32>,
+    /// Stick-slip model: instructions per sliding sample (μ identified) in blocks of
+    /// [`Self::block_size`].
+    pub instructions_per_sample_in_blocks: Option<f64>,
+    /// Stick-slip and fixed-base models: instructions per stuck sample in blocks.
+    pub instructions_per_sample_stuck_in_blocks: Option<f64>,
     /// Updates timed in the steady-state block.
     pub updates: u32,
     /// SysTick ticks of the steady-state block.
@@ -870,6 +878,18 @@ pub fn instruction_counts(frames: &[DecodedFrame]) -> Option<InstructionCounts> 
             )
         })
     });
+    let blk = frames
+        .iter()
+        .find(|f| f.message.starts_with("icount block "));
+    let block_size = blk.and_then(|m| m.parse::<u32>("batch"));
+    let in_blocks = |field: &str| {
+        blk.and_then(|m| {
+            let n: u32 = m.parse("updates")?;
+            let lp: u32 = m.parse("loop_ticks")?;
+            let ticks: u32 = m.parse(field)?;
+            (n > 0 && ticks > 0).then(|| (f64::from(ticks) - f64::from(lp)) * ipt / f64::from(n))
+        })
+    };
     let det = frames
         .iter()
         .find(|f| f.message.starts_with("icount detector "));
@@ -916,6 +936,9 @@ pub fn instruction_counts(frames: &[DecodedFrame]) -> Option<InstructionCounts> 
         instructions_per_event_max_age: long.map(|l| l.0),
         max_event_age: long.map(|l| l.1),
         instructions_per_sample_without_identification: predict,
+        block_size,
+        instructions_per_sample_in_blocks: in_blocks("slide_ticks"),
+        instructions_per_sample_stuck_in_blocks: in_blocks("stuck_ticks"),
         updates,
         update_ticks,
         loop_ticks,

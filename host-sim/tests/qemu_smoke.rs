@@ -425,6 +425,15 @@ fn qemu_image_stick_slip_model_matches_the_host() {
         ic.max_event_age
     );
     assert_eq!(ic.reversal_errors, 0);
+    // The pipeline's way (blocks): within the goal of 40 per steady-state sample.
+    assert!(ic.block_size.is_some());
+    for (name, v) in [
+        ("sliding", ic.instructions_per_sample_in_blocks),
+        ("stuck", ic.instructions_per_sample_stuck_in_blocks),
+    ] {
+        let v = v.unwrap_or(f64::NAN);
+        assert!(v > 15.0 && v <= 40.0, "{name} in blocks: {v}");
+    }
 }
 
 #[test]

@@ -36,7 +36,7 @@
 //! * `icount result instructions_per_tick=.. instructions_per_sample=.. instructions_per_reversal=..`
 
 use super::model::Estimator;
-use super::pipeline::{EventSource, Pipeline, Sample};
+use super::pipeline::{EventSource, FrameOut, Pipeline, Sample, BATCH};
 use super::scene::Detector;
 use core::hint::black_box;
 use core::sync::atomic::{compiler_fence, Ordering};
@@ -292,18 +292,34 @@ fn run_detector(t: &mut Ticks, est: &Estimator, det: &Detector) {
         flags: 0,
         reversal: None,
     };
+    // In batches of BATCH, as the images run it: the loop alone fills the batch and touches the
+    // frames.
     let mut pipe = Pipeline::new(est.clone(), det.clone(), EventSource::Detector);
-    for i in 0..WARMUP {
-        black_box(pipe.step(&sample(i)));
+    let mut batch = [Sample::missing(0); BATCH];
+    let mut frames = [FrameOut::EMPTY; BATCH];
+    let fill = |batch: &mut [Sample; BATCH], from: u32| {
+        for (b, i) in batch.iter_mut().zip(from..) {
+            *b = sample(i);
+        }
+    };
+    for from in (0..WARMUP).step_by(BATCH) {
+        fill(&mut batch, from);
+        black_box(pipe.step_batch(&batch, &mut frames));
     }
+    let from = WARMUP.next_multiple_of(BATCH as u32);
+    let batches = (from..from + DETECTOR_SAMPLES).step_by(BATCH);
     let loop_ticks = t.time(|| {
-        for i in WARMUP..WARMUP + DETECTOR_SAMPLES {
-            black_box(sample(i));
+        for from in batches.clone() {
+            fill(&mut batch, from);
+            black_box(&mut batch);
+            black_box(&mut frames);
         }
     });
     let step_ticks = t.time(|| {
-        for i in WARMUP..WARMUP + DETECTOR_SAMPLES {
-            black_box(black_box(&mut pipe).step(&sample(i)));
+        for from in batches.clone() {
+            fill(&mut batch, from);
+            black_box(black_box(&mut pipe).step_batch(&batch, &mut frames));
+            black_box(&mut frames);
         }
     });
     defmt::info!(
@@ -409,12 +425,69 @@ fn stuck_block(t: &mut Ticks, est: &Estimator) -> u32 {
     })
 }
 
+/// Steady-state samples of the estimator in blocks of [`super::pipeline::BATCH`]
+/// (`update_block`, as the pipeline runs it): stuck, and sliding with μ identified (stick-slip
+/// model; fixed-base: 0). Emits `icount block batch=.. updates=.. loop_ticks=.. stuck_ticks=..
+/// slide_ticks=..`.
+#[cfg(not(ssvr_model = "rectangular"))]
+fn block_runs(t: &mut Ticks, est: &Estimator) {
+    let blocks = UPDATES / BATCH as u32;
+    let (u, y) = inputs();
+    let (table, top) = ([u; BATCH], [y; BATCH]);
+    let mut out = [0.0f32; BATCH];
+    let loop_ticks = t.time(|| {
+        for i in 0..blocks {
+            black_box(i);
+            black_box(&mut out);
+        }
+    });
+    // Warm up (past the history and the first identification blocks), then time.
+    let time_blocks = |t: &mut Ticks, e: &mut Estimator, out: &mut [f32; BATCH]| {
+        let mut errors = 0u32;
+        for _ in 0..(1000 + super::scene::HISTORY) / BATCH + 1 {
+            errors += u32::from(e.update_block(&table, &top, out).is_err());
+        }
+        let ticks = t.time(|| {
+            for _ in 0..blocks {
+                let e = black_box(&mut *e);
+                errors += u32::from(
+                    e.update_block(black_box(&table), black_box(&top), out)
+                        .is_err(),
+                );
+                black_box(&mut *out);
+            }
+        });
+        (ticks, errors)
+    };
+    let mut stuck = est.clone();
+    let (stuck_ticks, mut errors) = time_blocks(t, &mut stuck, &mut out);
+    let slide_ticks = if cfg!(ssvr_model = "stick_slip") {
+        let mut slide = est.clone();
+        errors += u32::from(slide.push_event(1, 0.0).is_err());
+        let (ticks, e) = time_blocks(t, &mut slide, &mut out);
+        errors += e;
+        ticks
+    } else {
+        0
+    };
+    defmt::info!(
+        "icount block batch={=u32} updates={=u32} loop_ticks={=u32} stuck_ticks={=u32} slide_ticks={=u32} errors={=u32}",
+        BATCH as u32,
+        blocks * BATCH as u32,
+        loop_ticks,
+        stuck_ticks,
+        slide_ticks,
+        errors
+    );
+}
+
 /// The stick-slip model: steady sliding samples (μ identified on every block: the history is full
 /// and the delayed samples slide), events at age 0.5, events at the largest age; and the stuck
 /// samples (`icount stick_slip`).
 #[cfg(ssvr_model = "stick_slip")]
 fn estimator_blocks(t: &mut Ticks, est: Estimator) -> (u32, u32, u32, u32) {
     use super::model::MAX_AGE;
+    block_runs(t, &est);
     let stuck_ticks = stuck_block(t, &est);
     let mut est = est;
     let (u, y) = inputs();
@@ -488,6 +561,7 @@ fn estimator_blocks(t: &mut Ticks, est: Estimator) -> (u32, u32, u32, u32) {
 /// The fixed-base model: steady stuck samples (no event is ever pushed).
 #[cfg(ssvr_model = "fixed_base")]
 fn estimator_blocks(t: &mut Ticks, est: Estimator) -> (u32, u32, u32, u32) {
+    block_runs(t, &est);
     let stuck_ticks = stuck_block(t, &est);
     defmt::info!(
         "icount stick_slip stuck_updates={=u32} stuck_ticks={=u32} long_events={=u32} long_event_ticks={=u32} max_age={=f32} predict_updates={=u32} predict_ticks={=u32}",

@@ -28,7 +28,7 @@ mod scene_board {
 
 #[cfg(feature = "bench")]
 use super::bench;
-use super::pipeline::{self, flags, EventSource, Pipeline, Sample, DISP};
+use super::pipeline::{self, flags, EventSource, FrameOut, Pipeline, Sample, BATCH, DISP};
 use super::{model, scene, stack};
 use ads131m04::Ads131m04;
 use core::cell::RefCell;
@@ -212,15 +212,24 @@ pub fn run() -> ! {
     let mut streamed: u32 = 0;
     loop {
         let mut n: u32 = 0;
-        while let Some(raw) = consumer.dequeue() {
-            let sample = Sample {
-                channels: raw.channels,
-                flags: raw.flags,
-                reversal: None,
-            };
-            let frame = pipeline.step(&sample);
-            pipeline::emit(&frame);
-            n = n.wrapping_add(1);
+        // Whole batches of BATCH samples (the estimator's block; BATCH samples of latency).
+        while consumer.len() >= BATCH {
+            let mut batch = [Sample::missing(0); BATCH];
+            for b in batch.iter_mut() {
+                if let Some(raw) = consumer.dequeue() {
+                    *b = Sample {
+                        channels: raw.channels,
+                        flags: raw.flags,
+                        reversal: None,
+                    };
+                }
+            }
+            let mut frames = [FrameOut::EMPTY; BATCH];
+            let done = pipeline.step_batch(&batch, &mut frames);
+            for frame in frames.iter().take(done) {
+                pipeline::emit(frame);
+            }
+            n = n.wrapping_add(done as u32);
         }
         if n > 0 && streamed / stats_every != (streamed + n) / stats_every {
             pipeline::emit_stats(&pipeline.stats);

@@ -121,20 +121,34 @@ pub fn push(_est: &mut Estimator, _e: &Event) -> Result<Pushed, Error> {
     Ok(Pushed::No)
 }
 
-/// The prediction of this sample. `channels`: table accel, base accel, top accel, displacement;
-/// `top_valid`: the top acceleration may be used for the friction identification (not
-/// saturated, not missing; a non-finite value is skipped anyway).
+/// The estimator's inputs of a sample: the table acceleration and the top acceleration (NaN,
+/// i.e. not used, unless `top_valid`: not saturated, not missing; a non-finite value is skipped
+/// anyway). `channels`: table accel, base accel, top accel, displacement.
 #[inline(always)]
-pub fn update(est: &mut Estimator, channels: &[f32; 4], top_valid: bool) -> f32 {
+pub fn inputs(channels: &[f32; 4], top_valid: bool) -> (f32, f32) {
+    let top = if top_valid { channels[TOP] } else { f32::NAN };
+    (channels[TABLE], top)
+}
+
+/// The predictions of a run of samples without events (`table`, `top` from [`inputs`]; the
+/// slices are equally long): the rectangular `update()` per sample, or the stick-slip
+/// estimator's `update_block` (bit for bit `update(table, top)` per sample).
+pub fn update_run(est: &mut Estimator, table: &[f32], top: &[f32], out: &mut [f32]) {
     #[cfg(ssvr_model = "rectangular")]
     {
-        let _ = (channels, top_valid, TABLE, TOP);
-        est.update()
+        let _ = (table, top);
+        for o in out.iter_mut() {
+            *o = est.update();
+        }
     }
     #[cfg(not(ssvr_model = "rectangular"))]
     {
-        let top = if top_valid { channels[TOP] } else { f32::NAN };
-        est.update(channels[TABLE], top)
+        if est.update_block(table, top, out).is_err() {
+            // Unequal lengths (not from the pipeline): sample by sample, as far as all go.
+            for ((&u, &y), o) in table.iter().zip(top).zip(out.iter_mut()) {
+                *o = est.update(u, y);
+            }
+        }
     }
 }
 

@@ -1,12 +1,18 @@
-//! The per-sample pipeline shared by both images: validate a sample, run the reversal detector on
-//! its displacement, feed the detected events to the estimator, predict, and queue a frame for
-//! the streaming loop.
+//! The pipeline shared by both images: validate a sample, run the friction-event detector on it,
+//! feed the detected events to the estimator, predict, and hand a frame to the streaming side.
 //!
-//! The sample side (TIM2 interrupt on the board, the log-replay loop under QEMU) owns a
-//! [`Pipeline`] and the [`Producer`] of a heapless SPSC queue; the streaming side owns the
-//! [`Consumer`] and turns each [`FrameOut`] into one defmt `sample` message ([`emit`]).
+//! Samples are processed in batches of [`BATCH`] ([`Pipeline::step_batch`]; the board's main
+//! loop waits for a whole batch, so predictions come [`BATCH`] samples late; the QEMU replay
+//! processes the log in batches and the last, partial one at its end). The QEMU replay owns a
+//! [`Pipeline`] and the [`Producer`] of a heapless SPSC queue ([`Pipeline::produce_batch`]); the
+//! streaming side owns the [`Consumer`] and turns each [`FrameOut`] into one defmt `sample`
+//! message ([`emit`]).
 //!
-//! Per sample, in this order (host-sim's `qemu_cmd::HostPipeline` mirrors it step by step):
+//! The result is that of processing sample by sample, in this order (host-sim's
+//! `qemu_cmd::HostPipeline` mirrors it step by step, and the firmware's frames equal its frames
+//! bit for bit): steps 1–2 run on every sample of the batch first, then steps 3–4 over the batch
+//! in runs split at the samples with an event (the stick-slip estimator's `update_block` on a
+//! run is its `update` on each sample, bit for bit):
 //!
 //! 1. flags: `NOT_FINITE` if a channel is NaN/inf; the displacement is unusable (`DISP_INVALID`)
 //!    if the sample is missing, the displacement is not finite, flagged saturated upstream, or at
@@ -42,10 +48,21 @@ pub const BASE: usize = 1;
 /// Index of the displacement channel.
 pub const DISP: usize = 3;
 
+/// Samples per batch: the pipeline runs the detector on each sample of a batch, then the
+/// estimator over the batch (`update_block`) in runs split at the events. 16 (1.6 ms at 10 kHz)
+/// brings the stick-slip estimator's steady-state sample under 40 instructions (the cost of
+/// each run's set-up and of the identification blocks spread over the run); it is also the
+/// board's latency in samples.
+pub const BATCH: usize = 16;
+const _: () = assert!(
+    BATCH >= 1 && BATCH <= 32,
+    "events of a batch are a u32 mask"
+);
+
 /// Capacity of the sample -> streaming queue (a heapless queue of N holds N - 1 frames). The
 /// board streams from its main loop as soon as a frame is queued, so 31 frames (3.1 ms at
 /// 10 kHz) of slack is plenty there and keeps its static RAM under 8 KiB with room for the
-/// detector's ring at high rates; the QEMU replay drains every 16 samples.
+/// detector's ring at high rates; the QEMU replay drains after every batch.
 #[cfg(feature = "board")]
 #[allow(dead_code)] // the board image queues raw samples instead (board.rs)
 pub const QUEUE_LEN: usize = 32;
@@ -195,6 +212,17 @@ pub struct FrameOut {
     pub prediction: f32,
 }
 
+impl FrameOut {
+    /// A placeholder (overwritten by [`Pipeline::step_batch`]).
+    pub const EMPTY: Self = Self {
+        index: 0,
+        flags: 0,
+        event: None,
+        channels: [0.0; CHANNELS],
+        prediction: 0.0,
+    };
+}
+
 /// Counters of a run.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Stats {
@@ -226,6 +254,10 @@ pub struct Pipeline {
     overrun: bool,
     /// Counters.
     pub stats: Stats,
+    /// The estimator's inputs and outputs of the current batch.
+    table: [f32; BATCH],
+    top: [f32; BATCH],
+    pred: [f32; BATCH],
 }
 
 impl Pipeline {
@@ -238,13 +270,63 @@ impl Pipeline {
             index: 0,
             overrun: false,
             stats: Stats::default(),
+            table: [0.0; BATCH],
+            top: [0.0; BATCH],
+            pred: [0.0; BATCH],
         }
     }
 
-    /// Process one sample: flag it, run the detector, push its event, update the estimator
-    /// (always, to keep time, whether the sample is valid or not) and build its frame. Never
-    /// panics.
-    pub fn step(&mut self, s: &Sample) -> FrameOut {
+    /// Process a batch of samples (at most [`BATCH`], and at most `frames.len()`; the rest of
+    /// `samples` is ignored) into `frames`: per sample, flag it and run the detector; then the
+    /// estimator over the batch in runs split at the events, each event pushed before the
+    /// update of its sample, exactly as sample by sample (bit for bit: `update_block` is
+    /// `update` on a block); the estimator is updated for every sample, valid or not, to keep
+    /// time. Returns the number of frames written. Never panics.
+    pub fn step_batch(&mut self, samples: &[Sample], frames: &mut [FrameOut]) -> usize {
+        let (mut n, mut events) = (0, 0u32);
+        for (s, fr) in samples.iter().zip(frames.iter_mut()).take(BATCH) {
+            *fr = self.detect(s);
+            if fr.event.is_some() {
+                events |= 1 << n;
+            }
+            let top_valid = fr.flags & (flags::SATURATED | flags::MISSING) == 0;
+            if let (Some(u), Some(y)) = (self.table.get_mut(n), self.top.get_mut(n)) {
+                (*u, *y) = model::inputs(&s.channels, top_valid);
+            }
+            n += 1;
+        }
+        let mut i = 0;
+        while i < n {
+            if let Some(fr) = frames.get_mut(i) {
+                if let Some(e) = fr.event {
+                    fr.flags |= self.push(&e);
+                }
+            }
+            // The run up to the next event (bit j of `events`: sample j has one).
+            let later = events.checked_shr(i as u32 + 1).unwrap_or(0);
+            let end = if later == 0 {
+                n
+            } else {
+                i + 1 + later.trailing_zeros() as usize
+            };
+            if let (Some(u), Some(y), Some(p)) = (
+                self.table.get(i..end),
+                self.top.get(i..end),
+                self.pred.get_mut(i..end),
+            ) {
+                model::update_run(&mut self.estimator, u, y, p);
+            }
+            i = end;
+        }
+        for (fr, &p) in frames.iter_mut().zip(self.pred.iter()).take(n) {
+            fr.prediction = p;
+        }
+        n
+    }
+
+    /// A sample's flags, its detector event (counted) and its frame (index assigned, no
+    /// prediction yet).
+    fn detect(&mut self, s: &Sample) -> FrameOut {
         let mut f =
             s.flags & (flags::SATURATED | flags::MISSING | flags::ADC_ERROR | flags::DISP_INVALID);
         if f & flags::ADC_ERROR != 0 {
@@ -256,6 +338,9 @@ impl Pipeline {
         let disp = s.channels[DISP];
         if f & flags::MISSING != 0 || !disp.is_finite() || disp.abs() >= scene::DISP_RANGE_M {
             f |= flags::DISP_INVALID;
+        }
+        if f & flags::INVALID != 0 {
+            self.stats.invalid = self.stats.invalid.wrapping_add(1);
         }
         let detected = self.detector.process(detector_input(&s.channels, f));
         let event = match self.source {
@@ -271,36 +356,35 @@ impl Pipeline {
             if e.kind == EventKind::Stick {
                 self.stats.sticks = self.stats.sticks.wrapping_add(1);
             }
-            match model::push(&mut self.estimator, e) {
-                Ok(Pushed::No) => {}
-                Ok(p) => {
-                    f |= flags::REVERSAL;
-                    self.stats.reversals = self.stats.reversals.wrapping_add(1);
-                    if p == Pushed::Clamped {
-                        self.stats.clamped = self.stats.clamped.wrapping_add(1);
-                    }
-                }
-                Err(_) => {
-                    f |= flags::REVERSAL_REJECTED;
-                    self.stats.rejected = self.stats.rejected.wrapping_add(1);
-                }
-            }
-        }
-        let top_valid = f & (flags::SATURATED | flags::MISSING) == 0;
-        let prediction = model::update(&mut self.estimator, &s.channels, top_valid);
-        if f & flags::INVALID != 0 {
-            self.stats.invalid = self.stats.invalid.wrapping_add(1);
         }
         let frame = FrameOut {
             index: self.index,
             flags: f,
             event,
             channels: s.channels,
-            prediction,
+            prediction: 0.0,
         };
         self.index = self.index.wrapping_add(1);
         self.stats.samples = self.stats.samples.wrapping_add(1);
         frame
+    }
+
+    /// Push an event to the estimator (before its sample's update): the flags it adds.
+    fn push(&mut self, e: &Event) -> u8 {
+        match model::push(&mut self.estimator, e) {
+            Ok(Pushed::No) => 0,
+            Ok(p) => {
+                self.stats.reversals = self.stats.reversals.wrapping_add(1);
+                if p == Pushed::Clamped {
+                    self.stats.clamped = self.stats.clamped.wrapping_add(1);
+                }
+                flags::REVERSAL
+            }
+            Err(_) => {
+                self.stats.rejected = self.stats.rejected.wrapping_add(1);
+                flags::REVERSAL_REJECTED
+            }
+        }
     }
 
     /// The estimator.
@@ -308,19 +392,22 @@ impl Pipeline {
         &self.estimator
     }
 
-    /// [`Self::step`], then queue the frame; a full queue drops it and flags the next frame
-    /// that gets through with [`flags::OVERRUN`].
+    /// [`Self::step_batch`], then queue the frames; a full queue drops a frame and flags the
+    /// next frame that gets through with [`flags::OVERRUN`].
     #[cfg_attr(feature = "board", allow(dead_code))]
-    pub fn produce(&mut self, s: &Sample, producer: &mut Producer<'_, FrameOut>) {
-        let mut frame = self.step(s);
-        if self.overrun {
-            frame.flags |= flags::OVERRUN;
-        }
-        match producer.enqueue(frame) {
-            Ok(()) => self.overrun = false,
-            Err(_) => {
-                self.overrun = true;
-                self.stats.dropped = self.stats.dropped.wrapping_add(1);
+    pub fn produce_batch(&mut self, samples: &[Sample], producer: &mut Producer<'_, FrameOut>) {
+        let mut frames = [FrameOut::EMPTY; BATCH];
+        let n = self.step_batch(samples, &mut frames);
+        for mut frame in frames.into_iter().take(n) {
+            if self.overrun {
+                frame.flags |= flags::OVERRUN;
+            }
+            match producer.enqueue(frame) {
+                Ok(()) => self.overrun = false,
+                Err(_) => {
+                    self.overrun = true;
+                    self.stats.dropped = self.stats.dropped.wrapping_add(1);
+                }
             }
         }
     }

@@ -10,7 +10,7 @@
 //! relative to QEMU's working directory), else `SSVR_QEMU_LOG` at build time, else
 //! `sensor.ssvrlog`.
 
-use super::pipeline::{self, EventSource, FrameOut, Pipeline, QUEUE_LEN};
+use super::pipeline::{self, EventSource, FrameOut, Pipeline, Sample, BATCH, QUEUE_LEN};
 use super::sensor_log::{
     self, options, Header, LogError, COUNT_UNTIL_EOF, HEADER_LEN, RECORD_LEN, REVERSAL_LEN,
 };
@@ -46,9 +46,6 @@ pub mod status {
     /// The log header's sample rate or structure differs from the compiled-in scene.
     pub const SCENE_MISMATCH: u32 = 7;
 }
-
-/// Samples replayed between two drains of the queue (the streaming loop's turn).
-const BATCH: u32 = 16;
 
 /// Exit QEMU with `code` (SYS_EXIT_EXTENDED, ADP_Stopped_ApplicationExit + subcode: QEMU exits
 /// with that status).
@@ -317,6 +314,11 @@ pub fn run() -> ! {
     let (mut producer, mut consumer) = queue.split();
     let mut n: u32 = 0;
     let mut read_error = None;
+    // Samples are replayed in batches of BATCH (the pipeline's estimator block); the queue is
+    // drained after each (the streaming loop's turn), and the last, partial batch is processed
+    // whatever ends the log.
+    let mut batch = [Sample::missing(0); BATCH];
+    let mut queued = 0;
     while header.sample_count == COUNT_UNTIL_EOF || n < header.sample_count {
         let mut rb = [0u8; RECORD_LEN];
         match reader.read_exact(&mut rb) {
@@ -342,12 +344,18 @@ pub fn run() -> ! {
                 }
             }
         }
-        pipe.produce(&sample, &mut producer);
+        if let Some(b) = batch.get_mut(queued) {
+            *b = sample;
+            queued += 1;
+        }
         n += 1;
-        if n.is_multiple_of(BATCH) {
+        if queued == BATCH {
+            pipe.produce_batch(&batch, &mut producer);
+            queued = 0;
             let _ = pipeline::drain(&mut consumer);
         }
     }
+    pipe.produce_batch(batch.get(..queued).unwrap_or(&[]), &mut producer);
     let _ = pipeline::drain(&mut consumer);
     pipeline::emit_stats(&pipe.stats);
     model::emit_mu(model::mu_estimate(pipe.estimator()));
