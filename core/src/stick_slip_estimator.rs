@@ -31,9 +31,14 @@
 //! phase (±g·μ times the force vector) is precomputed. The steady-state sliding sample is then one
 //! 2×2 map from the slot before, one slot written, and a ring index compared with a precomputed
 //! limit (`fast_until`: the mode is plain sliding and no *mark* follows); the stuck sample is the
-//! same with the fixed-base map (`stuck_until`). Everything else takes the general path: a switch
-//! inside the interval, a phase change at its end, a non-finite table acceleration, sample 0, and
-//! the marks, where the rare work is done: the ring's wrap and the identification blocks.
+//! same with the fixed-base map (`stuck_until`), one map of ten coefficients with the observer's
+//! correction folded in. Everything else takes the general path: a switch inside the interval, a
+//! phase change at its end, a non-finite table acceleration, sample 0, and the marks, where the
+//! rare work is done: the ring's wrap and the identification blocks.
+//! [`StickSlipEstimator::update_block`] runs a block of samples, bit for bit as many `update`s:
+//! its steady runs (up to the next mark, whose work it then does) keep the coefficients and the
+//! state in registers and check their inputs once, at the end (a non-finite one redoes the run
+//! sample by sample); the firmware runs it on batches of 16 samples.
 //!
 //! **Stuck-phase observer.** Switching between the sliding and the stuck dynamics at given
 //! times (the estimator's situation; the truth switches on its own state) is parametrically
@@ -1201,7 +1206,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
             let done = self.run(t, y, o);
             if done == 0 {
                 if let Some(o0) = o.first_mut() {
-                    *o0 = self.update(u0, y0);
+                    *o0 = self.update_one(u0, y0);
                 }
                 i += 1;
             } else {
@@ -1209,6 +1214,12 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
             }
         }
         Ok(())
+    }
+
+    /// [`Self::update`] out of line (one copy of its inline paths for [`Self::update_block`]).
+    #[inline(never)]
+    fn update_one(&mut self, table_accel: T, measured_top: T) -> T {
+        self.update(table_accel, measured_top)
     }
 
     /// The steady-state run at the start of a block ([`Self::update_block`]): plain sliding or
@@ -1276,7 +1287,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
         } else {
             unlikely();
             for ((&u, &y), o) in table.iter().zip(top).zip(out.iter_mut()).take(m) {
-                *o = self.update(u, y);
+                *o = self.update_one(u, y);
             }
         }
         m

@@ -13,7 +13,9 @@
 //!
 //! host-sim's `qemu_cmd::HostPipeline` mirrors these functions line by line.
 
-use super::pipeline::{Event, EventKind};
+#[cfg(not(ssvr_model = "rectangular"))]
+use super::pipeline::{flags, BATCH};
+use super::pipeline::{Event, EventKind, FrameOut};
 use super::scene;
 use ssvr_core::Error;
 
@@ -42,8 +44,10 @@ pub type Estimator = ssvr_core::stick_slip_estimator::StickSlipEstimator<
 pub const MAX_AGE: f32 = scene::MAX_EVENT_AGE_SAMPLES as f32;
 
 /// Index of the table acceleration channel.
+#[cfg(not(ssvr_model = "rectangular"))]
 const TABLE: usize = 0;
 /// Index of the top acceleration channel.
+#[cfg(not(ssvr_model = "rectangular"))]
 const TOP: usize = 2;
 
 /// The estimator for the compiled-in scene, at rest. The rectangular model computes its tables
@@ -122,31 +126,94 @@ pub fn push(_est: &mut Estimator, _e: &Event) -> Result<Pushed, Error> {
 }
 
 /// The estimator's inputs of a sample: the table acceleration and the top acceleration (NaN,
-/// i.e. not used, unless `top_valid`: not saturated, not missing; a non-finite value is skipped
+/// i.e. not used, when the sample is saturated or missing; a non-finite value is skipped
 /// anyway). `channels`: table accel, base accel, top accel, displacement.
+#[cfg(not(ssvr_model = "rectangular"))]
 #[inline(always)]
-pub fn inputs(channels: &[f32; 4], top_valid: bool) -> (f32, f32) {
-    let top = if top_valid { channels[TOP] } else { f32::NAN };
+fn inputs(channels: &[f32; 4], f: u8) -> (f32, f32) {
+    let top = if f & (flags::SATURATED | flags::MISSING) == 0 {
+        channels[TOP]
+    } else {
+        f32::NAN
+    };
     (channels[TABLE], top)
 }
 
-/// The predictions of a run of samples without events (`table`, `top` from [`inputs`]; the
-/// slices are equally long): the rectangular `update()` per sample, or the stick-slip
-/// estimator's `update_block` (bit for bit `update(table, top)` per sample).
-pub fn update_run(est: &mut Estimator, table: &[f32], top: &[f32], out: &mut [f32]) {
+/// Room for a run's estimator inputs and outputs (the stick-slip estimator's `update_block`;
+/// nothing for the rectangular model).
+#[derive(Debug, Clone)]
+pub struct RunBuffers {
+    #[cfg(not(ssvr_model = "rectangular"))]
+    table: [f32; BATCH],
+    #[cfg(not(ssvr_model = "rectangular"))]
+    top: [f32; BATCH],
+    #[cfg(not(ssvr_model = "rectangular"))]
+    pred: [f32; BATCH],
+}
+
+impl RunBuffers {
+    /// Zeroed.
+    pub const fn new() -> Self {
+        Self {
+            #[cfg(not(ssvr_model = "rectangular"))]
+            table: [0.0; BATCH],
+            #[cfg(not(ssvr_model = "rectangular"))]
+            top: [0.0; BATCH],
+            #[cfg(not(ssvr_model = "rectangular"))]
+            pred: [0.0; BATCH],
+        }
+    }
+}
+
+/// Keep the estimator's inputs of sample `i` of a batch (its `frame`: channels and flags) for
+/// [`predict_run`] (the stick-slip estimator; the rectangular model needs none).
+#[inline(always)]
+pub fn note_inputs(buf: &mut RunBuffers, i: usize, frame: &FrameOut) {
+    #[cfg(ssvr_model = "rectangular")]
+    let _ = (buf, i, frame);
+    #[cfg(not(ssvr_model = "rectangular"))]
+    if let (Some(u), Some(y)) = (buf.table.get_mut(i), buf.top.get_mut(i)) {
+        (*u, *y) = inputs(&frame.channels, frame.flags);
+    }
+}
+
+/// The predictions of `frames`, samples `from ..` of the batch, a run without events after its
+/// first sample: the rectangular `update()` per frame, or the stick-slip estimator's
+/// `update_block` on the inputs kept by [`note_inputs`] (bit for bit its `update(table, top)`
+/// per sample).
+#[inline(always)]
+pub fn predict_run(
+    est: &mut Estimator,
+    frames: &mut [FrameOut],
+    buf: &mut RunBuffers,
+    from: usize,
+) {
     #[cfg(ssvr_model = "rectangular")]
     {
-        let _ = (table, top);
-        for o in out.iter_mut() {
-            *o = est.update();
+        let _ = (buf, from);
+        for f in frames.iter_mut() {
+            f.prediction = est.update();
         }
     }
     #[cfg(not(ssvr_model = "rectangular"))]
     {
-        if est.update_block(table, top, out).is_err() {
-            // Unequal lengths (not from the pipeline): sample by sample, as far as all go.
-            for ((&u, &y), o) in table.iter().zip(top).zip(out.iter_mut()) {
-                *o = est.update(u, y);
+        let to = from + frames.len();
+        let (Some(table), Some(top), Some(pred)) = (
+            buf.table.get(from..to),
+            buf.top.get(from..to),
+            buf.pred.get_mut(from..to),
+        ) else {
+            return;
+        };
+        if est.update_block(table, top, pred).is_ok() {
+            for (f, &p) in frames.iter_mut().zip(pred.iter()) {
+                f.prediction = p;
+            }
+        } else {
+            // (Not reached: the slices are equally long.)
+            for f in frames.iter_mut() {
+                let (u, y) = inputs(&f.channels, f.flags);
+                f.prediction = est.update(u, y);
             }
         }
     }

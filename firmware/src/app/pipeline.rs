@@ -254,10 +254,8 @@ pub struct Pipeline {
     overrun: bool,
     /// Counters.
     pub stats: Stats,
-    /// The estimator's inputs and outputs of the current batch.
-    table: [f32; BATCH],
-    top: [f32; BATCH],
-    pred: [f32; BATCH],
+    /// The estimator's inputs and outputs of a run.
+    buffers: model::RunBuffers,
 }
 
 impl Pipeline {
@@ -270,9 +268,7 @@ impl Pipeline {
             index: 0,
             overrun: false,
             stats: Stats::default(),
-            table: [0.0; BATCH],
-            top: [0.0; BATCH],
-            pred: [0.0; BATCH],
+            buffers: model::RunBuffers::new(),
         }
     }
 
@@ -289,10 +285,7 @@ impl Pipeline {
             if fr.event.is_some() {
                 events |= 1 << n;
             }
-            let top_valid = fr.flags & (flags::SATURATED | flags::MISSING) == 0;
-            if let (Some(u), Some(y)) = (self.table.get_mut(n), self.top.get_mut(n)) {
-                (*u, *y) = model::inputs(&s.channels, top_valid);
-            }
+            model::note_inputs(&mut self.buffers, n, fr);
             n += 1;
         }
         let mut i = 0;
@@ -309,17 +302,10 @@ impl Pipeline {
             } else {
                 i + 1 + later.trailing_zeros() as usize
             };
-            if let (Some(u), Some(y), Some(p)) = (
-                self.table.get(i..end),
-                self.top.get(i..end),
-                self.pred.get_mut(i..end),
-            ) {
-                model::update_run(&mut self.estimator, u, y, p);
+            if let Some(run) = frames.get_mut(i..end) {
+                model::predict_run(&mut self.estimator, run, &mut self.buffers, i);
             }
             i = end;
-        }
-        for (fr, &p) in frames.iter_mut().zip(self.pred.iter()).take(n) {
-            fr.prediction = p;
         }
         n
     }
