@@ -887,7 +887,10 @@ pub fn instruction_counts(frames: &[DecodedFrame]) -> Option<InstructionCounts> 
             let n: u32 = m.parse("updates")?;
             let lp: u32 = m.parse("loop_ticks")?;
             let ticks: u32 = m.parse(field)?;
-            (n > 0 && ticks > 0).then(|| (f64::from(ticks) - f64::from(lp)) * ipt / f64::from(n))
+            // A block the estimator refused (never expected) voids the figures.
+            let errors: u32 = m.parse("errors")?;
+            (n > 0 && ticks > 0 && errors == 0)
+                .then(|| (f64::from(ticks) - f64::from(lp)) * ipt / f64::from(n))
         })
     };
     let det = frames

@@ -19,6 +19,10 @@
 //!   `max_age` samples old (the history re-simulated; stick-slip only, else `long_events=0`),
 //!   and steady sliding samples without the μ identification (the prediction alone; stick-slip
 //!   only, else `predict_updates=0`);
+//! * `icount block batch=.. updates=.. loop_ticks=.. stuck_ticks=.. slide_ticks=.. errors=..`
+//!   (stick-slip and fixed-base models): the estimator's `update_block` on blocks of
+//!   `pipeline::BATCH` samples, as the pipeline runs it: stuck, and sliding with μ identified
+//!   (stick-slip only, else `slide_ticks=0`); `errors` counts refused blocks (none expected);
 //! * `icount detector samples=.. loop_ticks=.. ramp_ticks=.. triangle_ticks=.. reversals=..`:
 //!   the reversal detector on a displacement ramp (sliding, a new extremum every sample: its
 //!   steady state) and on a triangle wave (a reversal every [`TRIANGLE_HALF`] samples), both
@@ -30,9 +34,10 @@
 //!   a slip start and a stick per step, each with its kink fit) and the same generator as a ramp;
 //!   the phase detector on a stick and a ramp breakaway every 100 samples ([`stair_signal`]) and
 //!   on the same generator held stuck;
-//! * `icount pipeline samples=.. loop_ticks=.. step_ticks=..`: the whole per-sample step of the
-//!   firmware (flags, detector, estimator, frame; no I/O) on a ramp of half the slope from −25 mm
-//!   (sliding throughout, inside the displacement range), and the loop alone;
+//! * `icount pipeline samples=.. loop_ticks=.. step_ticks=..`: the firmware's whole step in
+//!   batches of `pipeline::BATCH` (flags, detector, estimator, frames; no I/O) on a ramp of half
+//!   the slope from −25 mm (sliding throughout, inside the displacement range), and the loop
+//!   alone (filling the batches);
 //! * `icount result instructions_per_tick=.. instructions_per_sample=.. instructions_per_reversal=..`
 
 use super::model::Estimator;
