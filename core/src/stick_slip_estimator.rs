@@ -1189,7 +1189,8 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
     /// between blocks: [`Self::push_event`] before the sample it precedes), but cheaper: the
     /// steady-state runs (plain sliding or plain stuck up to the next mark) keep the map's
     /// coefficients and the state in registers. Lengths that differ are an error (nothing
-    /// processed).
+    /// processed). (Once the state has overflowed to NaN, the sign of a NaN may differ: the
+    /// compiler may commute an addition.)
     pub fn update_block(&mut self, table: &[T], top: &[T], out: &mut [T]) -> Result<(), Error> {
         if top.len() != table.len() || out.len() != table.len() {
             return Err(Error::OutOfRange {
@@ -1371,7 +1372,11 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
             (u, [T::ZERO; 2])
         } else {
             let sp = if pos <= self.first { H - 1 } else { pos - 1 };
-            let prev = self.slots.get(sp).copied().unwrap_or(Slot {
+            // The previous sample's slot: the copy in slot 0 after a wrap if there is one (slot
+            // H − 1 may already hold this pass's sample: a block's run that reached it and is
+            // being redone sample by sample); its phases stay at `sp`.
+            let prev_slot = if pos >= 1 { pos - 1 } else { H - 1 };
+            let prev = self.slots.get(prev_slot).copied().unwrap_or(Slot {
                 u: T::ZERO,
                 y: T::ZERO,
                 z: [T::ZERO; 2],
@@ -2341,6 +2346,47 @@ mod tests {
         block_vs_samples::<{ storage_for(39, 32) }>(cfg, 39, 30_000);
         block_vs_samples::<144>(cfg, 144, 30_000);
         block_vs_samples::<64>(StickSlipConfig::DEFAULT.for_rate(1e3), 40, 30_000);
+    }
+
+    /// A non-finite table acceleration in the first slot after the ring's wrap, inside a block
+    /// whose run reached the ring's last slot (found by fuzzing `update_block` against `update`):
+    /// the redone sample reads its predecessor from the copy slot, not from the last slot the
+    /// aborted run overwrote.
+    #[test]
+    fn a_redone_run_after_the_wrap_reads_the_copy_slot() {
+        let s = structure(0.2, 0.05);
+        let cfg = StickSlipConfig {
+            identify_mu: false,
+            ..StickSlipConfig::DEFAULT
+        };
+        for phase in [0, 1] {
+            for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+                let mut a =
+                    StickSlipEstimator::<f32, F32Poly, 8>::with_history(&s, 1e4, cfg, 7).unwrap();
+                a.push_event(phase, 0.0).unwrap();
+                let mut b = a.clone();
+                let (mut want, mut got) = (std::vec::Vec::new(), std::vec::Vec::new());
+                for k in 0..7 {
+                    let (u, y) = inputs(k);
+                    want.push(a.update(u, y).to_bits());
+                    got.push(b.update(u, y).to_bits());
+                }
+                let (mut table, top): (std::vec::Vec<f32>, std::vec::Vec<f32>) =
+                    (7..30).map(inputs).unzip();
+                table[0] = bad;
+                want.extend(
+                    table
+                        .iter()
+                        .zip(&top)
+                        .map(|(&u, &y)| a.update(u, y).to_bits()),
+                );
+                let mut out = std::vec![0.0f32; table.len()];
+                b.update_block(&table, &top, &mut out).unwrap();
+                got.extend(out.iter().map(|x| x.to_bits()));
+                assert_eq!(got, want, "phase {phase}, table {bad}");
+                assert!(out.iter().all(|x| x.is_finite()));
+            }
+        }
     }
 
     #[test]
