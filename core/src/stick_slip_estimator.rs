@@ -1279,12 +1279,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
             z[0].is_finite() && z[1].is_finite()
         };
         if finite {
-            let last = at + m;
-            if last + 1 == self.mark {
-                self.at_mark(last + 1);
-            } else {
-                self.at = last;
-            }
+            self.stored(at + m, T::ZERO);
         } else {
             unlikely();
             for ((&u, &y), o) in table.iter().zip(top).zip(out.iter_mut()).take(m) {
@@ -1319,12 +1314,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
                     y: measured_top,
                     z,
                 };
-                let next = at + 2;
-                if next == self.mark {
-                    return self.at_mark(next);
-                }
-                self.at = at + 1;
-                return z[0];
+                return self.stored(at + 1, z[0]);
             }
         }
         self.update_edge(table_accel, measured_top)
@@ -1344,12 +1334,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
                     y: measured_top,
                     z,
                 };
-                let next = at + 2;
-                if next == self.mark {
-                    return self.at_mark(next);
-                }
-                self.at = at + 1;
-                return z[0];
+                return self.stored(at + 1, z[0]);
             }
         }
         self.update_cold(table_accel, measured_top)
@@ -1409,17 +1394,24 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
                 z,
             };
         }
-        let next = pos + 1;
-        if next == self.mark {
-            self.at_mark(next);
-        } else {
-            self.at = pos;
-        }
+        self.stored(pos, z[0]);
         if self.mode == MODE_COLD {
             // Interval k → k + 1 is plain in the current phase.
             self.set_fast_mode();
         }
         z[0]
+    }
+
+    /// After storing a sample in slot `pos` (its prediction `z0`): the mark's work if the mark
+    /// follows it, else the ring index moves on. Returns the prediction.
+    #[inline(always)]
+    fn stored(&mut self, pos: usize, z0: T) -> T {
+        if pos + 1 == self.mark {
+            self.at_mark(pos + 1)
+        } else {
+            self.at = pos;
+            z0
+        }
     }
 
     /// The slow path after storing the sample of slot `next − 1`: the identification block and

@@ -146,7 +146,7 @@ fn check_stick_slip(v: &Value, samples: u64) {
     assert!(num(v, "max_err_vs_reference_gmu") < 1e-4, "{v}");
     // Measured (docs/PERFORMANCE.md): in blocks of 16 (the pipeline's way) 34.7 per sliding
     // sample with the μ identification and 36.7 per stuck sample; one update() at a time 39.4
-    // sliding and 63.2 stuck, 34 sliding without the identification; ~877 per event at age 0.5.
+    // sliding and 63.2 stuck, 34 sliding without the identification; ~878 per event at age 0.5.
     assert_eq!(num(v, "block_size"), 16.0);
     let slide = num(v, "instructions_per_sample_in_blocks");
     assert!(slide > 15.0 && slide <= 40.0, "sliding in blocks {slide}");
