@@ -725,8 +725,8 @@ pub struct QemuReport {
     /// Extra instructions of the detector for a stick and the slip start that ends it (their
     /// kink fits; on the board the sample interrupt that detects a stick runs this long).
     pub detector_instructions_per_stick: Option<f64>,
-    /// Instructions of the firmware's whole per-sample step (flags, detector, estimator, frame;
-    /// no I/O), steady sliding state.
+    /// Instructions per sample of the firmware's whole step in batches of 16 (flags, detector,
+    /// estimator, frames; no I/O), steady sliding state.
     pub pipeline_instructions_per_sample: Option<f64>,
     /// Executed instructions per SysTick tick (calibrated; 40 on mps2-an386 at `shift=0`).
     pub instructions_per_tick: f64,

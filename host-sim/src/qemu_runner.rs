@@ -818,8 +818,8 @@ pub struct InstructionCounts {
     pub detector_instructions_per_sample: Option<f64>,
     /// Extra instructions of a sample where the detector reports a reversal (vertex fits).
     pub detector_instructions_per_reversal: Option<f64>,
-    /// Instructions of the firmware's whole per-sample step (flags, detector, estimator, frame;
-    /// no I/O) in the steady sliding state.
+    /// Instructions per sample of the firmware's whole step in batches of 16 (flags, detector,
+    /// estimator, frames; no I/O) in the steady sliding state.
     pub pipeline_instructions_per_sample: Option<f64>,
     /// Extra instructions of the detector for a stick and the slip start that ends it (their kink
     /// fits), over sliding samples.
