@@ -1,0 +1,109 @@
+//! The friction-event detectors behind one trait: which channel each reads, and how a sample's
+//! flags make that input unusable (NaN: the detector repeats its last value and keeps time).
+//!
+//! * [`DisplacementDetector`]: `ReversalDetector` on the base-to-table displacement
+//!   (rectangular and fixed-base models);
+//! * [`AccelerationDetector`]: `PhaseDetector` on the slip acceleration, base minus table
+//!   accelerometer (stick-slip model: its stick and slip-start times must be right to a
+//!   fraction of a sample).
+
+use crate::channel::{Channel, CHANNELS};
+use crate::flags;
+use crate::plan::{DetectorPlan, Plan, PlanError};
+use ssvr_core::phase_detector::PhaseDetector;
+use ssvr_core::reversal_detector::{ReversalDetector, SlipEvent};
+
+/// The displacement detector with a ring of `N` samples.
+pub type DisplacementDetector<const N: usize> = ReversalDetector<N>;
+/// The slip-acceleration detector with a ring of `N` samples.
+pub type AccelerationDetector<const N: usize> = PhaseDetector<N>;
+
+/// What a detector reads.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DetectorInput {
+    /// The base-to-table displacement (m).
+    Displacement,
+    /// The slip acceleration, base minus table accelerometer (m/s²).
+    SlipAcceleration,
+}
+
+impl DetectorInput {
+    /// The detector's input of a sample with frame flags `f` (NaN: unusable). The displacement
+    /// is unusable with `DISP_INVALID`; the slip acceleration when the sample is missing, not
+    /// finite or saturated.
+    #[inline(always)]
+    pub fn of(self, channels: &[f32; CHANNELS], f: u8) -> f32 {
+        match self {
+            DetectorInput::SlipAcceleration => {
+                if f & (flags::MISSING | flags::NOT_FINITE | flags::SATURATED) != 0 {
+                    f32::NAN
+                } else {
+                    channels[Channel::BaseAccel.index()] - channels[Channel::TableAccel.index()]
+                }
+            }
+            DetectorInput::Displacement => {
+                if f & flags::DISP_INVALID != 0 {
+                    f32::NAN
+                } else {
+                    channels[Channel::Displacement.index()]
+                }
+            }
+        }
+    }
+}
+
+/// A friction-event detector the pipeline runs on every sample.
+pub trait EventDetector: Sized {
+    /// What it reads.
+    const INPUT: DetectorInput;
+    /// The detector of a plan; its ring must be the plan's.
+    fn from_plan(plan: &Plan) -> Result<Self, PlanError>;
+    /// Process one input sample (NaN: unusable); an event found, back-dated by its age.
+    fn process(&mut self, x: f32) -> Option<SlipEvent>;
+    /// The longest back-dating of its events (samples).
+    fn max_age_samples(&self) -> usize;
+}
+
+impl<const N: usize> EventDetector for ReversalDetector<N> {
+    const INPUT: DetectorInput = DetectorInput::Displacement;
+
+    fn from_plan(plan: &Plan) -> Result<Self, PlanError> {
+        match plan.detector {
+            DetectorPlan::Displacement(c) if plan.ring == N => {
+                ReversalDetector::new(c).map_err(PlanError::Core)
+            }
+            _ => Err(PlanError::Detector),
+        }
+    }
+
+    #[inline(always)]
+    fn process(&mut self, x: f32) -> Option<SlipEvent> {
+        ReversalDetector::process(self, x)
+    }
+
+    fn max_age_samples(&self) -> usize {
+        self.config().max_age_samples(N)
+    }
+}
+
+impl<const N: usize> EventDetector for PhaseDetector<N> {
+    const INPUT: DetectorInput = DetectorInput::SlipAcceleration;
+
+    fn from_plan(plan: &Plan) -> Result<Self, PlanError> {
+        match plan.detector {
+            DetectorPlan::SlipAcceleration(c) if plan.ring == N => {
+                PhaseDetector::new(c).map_err(PlanError::Core)
+            }
+            _ => Err(PlanError::Detector),
+        }
+    }
+
+    #[inline(always)]
+    fn process(&mut self, x: f32) -> Option<SlipEvent> {
+        PhaseDetector::process(self, x)
+    }
+
+    fn max_age_samples(&self) -> usize {
+        self.config().max_age_samples()
+    }
+}

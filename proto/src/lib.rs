@@ -1,0 +1,46 @@
+//! # ssvr-proto: the contract between the firmware and the host
+//!
+//! Everything both sides must agree on is written here once:
+//!
+//! * [`channel`], [`flags`], [`event`], [`frame`]: the measured channels, the bits of a frame's
+//!   flags, the friction events and the streamed frame;
+//! * [`log`]: the binary sensor log the QEMU image replays (format version 1, `LOG_FORMAT.md`);
+//! * [`plan`]: what a scene and a model turn into for the estimator (detector settings, ring and
+//!   history sizes, stick-slip settings and coefficients), as words the firmware's build embeds;
+//! * [`model`] and [`detector`]: the estimator models and friction-event detectors behind two
+//!   small traits;
+//! * [`pipeline`]: **the** per-sample step (flags → detector → events → model), run by the
+//!   firmware, by `host-sim qemu`'s check and by `host-sim run`;
+//! * [`stream`] (feature `defmt`): the defmt messages a frame and the counters are streamed as,
+//!   and their field names, which the host decoder reads back by type.
+//!
+//! `#![no_std]`, no allocation, no panics on data paths.
+#![no_std]
+#![deny(missing_docs)]
+#![cfg_attr(
+    not(test),
+    deny(clippy::unwrap_used, clippy::expect_used, clippy::panic)
+)]
+
+#[cfg(any(test, feature = "std"))]
+extern crate std;
+
+pub mod channel;
+pub mod detector;
+pub mod event;
+pub mod flags;
+pub mod frame;
+pub mod log;
+pub mod model;
+pub mod pipeline;
+pub mod plan;
+#[cfg(feature = "defmt")]
+pub mod stream;
+
+pub use channel::{Channel, CHANNELS};
+pub use detector::{AccelerationDetector, DetectorInput, DisplacementDetector, EventDetector};
+pub use event::{Event, EventKind};
+pub use frame::{Frame, Sample};
+pub use model::{FromPlan, Model, ModelKind, Pushed, RectangularModel, StickSlipModel};
+pub use pipeline::{EventSource, Pipeline, Stats, Step, BATCH};
+pub use plan::{DetectorPlan, Plan, PlanError, Specimen};

@@ -1,0 +1,143 @@
+//! "Model only what a scene needs": the estimator models, their settings (written once, for the
+//! firmware and the host), and the one trait the pipeline drives them through.
+//!
+//! * **fixed-base** ([`StickSlipModel`] with events off): the base never slides: the top mass is
+//!   a fixed-base oscillator driven by the measured table acceleration, no identification
+//!   ([`FIXED_BASE_CONFIG`]);
+//! * **rectangular** ([`RectangularModel`]): the base reciprocates continuously: the paper's
+//!   rectangular friction, the O(1) Duhamel recursion (`Estimator32`);
+//! * **stick-slip** ([`StickSlipModel`]): the base sticks and slides in turn: the stick-slip
+//!   estimator (f32, `F32Poly`) with online friction identification ([`STICK_SLIP_CONFIG`]).
+
+mod rectangular;
+mod stick_slip;
+
+pub use rectangular::RectangularModel;
+pub use stick_slip::StickSlipModel;
+
+use crate::event::Event;
+use crate::frame::Frame;
+use crate::plan::{Plan, PlanError};
+use ssvr_core::stick_slip_estimator::{MuEstimate, StickSlipConfig};
+use ssvr_core::Error;
+
+/// The stick-slip estimator's settings of the stick-slip model: μ identified and adopted at the
+/// start of each sliding episode (identification blocks per rate: [`ModelKind::stick_slip_config`]).
+pub const STICK_SLIP_CONFIG: StickSlipConfig = StickSlipConfig {
+    use_identified_mu: true,
+    ..StickSlipConfig::DEFAULT
+};
+
+/// The fixed-base model's settings: the stick-slip estimator without identification (it never
+/// leaves its stuck phase, so identifying μ would change nothing but the cost).
+pub const FIXED_BASE_CONFIG: StickSlipConfig = StickSlipConfig {
+    identify_mu: false,
+    observer_bandwidth: 0.0,
+    ..STICK_SLIP_CONFIG
+};
+
+/// An estimator model.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[repr(u8)]
+pub enum ModelKind {
+    /// Fixed-base oscillator (no sliding).
+    FixedBase = 0,
+    /// Rectangular friction, O(1) Duhamel recursion (continuous reciprocation).
+    Rectangular = 1,
+    /// Stick-slip aware estimator (stick and slide in turn).
+    StickSlip = 2,
+}
+
+impl ModelKind {
+    /// Every model.
+    pub const ALL: [ModelKind; 3] = [
+        ModelKind::FixedBase,
+        ModelKind::Rectangular,
+        ModelKind::StickSlip,
+    ];
+
+    /// The model's name as printed, in JSON and in the firmware's `SSVR_MODEL`.
+    pub const fn name(self) -> &'static str {
+        match self {
+            ModelKind::FixedBase => "fixed-base",
+            ModelKind::Rectangular => "rectangular",
+            ModelKind::StickSlip => "stick-slip",
+        }
+    }
+
+    /// The model of a name ([`Self::name`]).
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|m| m.name() == name)
+    }
+
+    /// The model of its code (`self as u8`).
+    pub const fn from_code(code: u8) -> Option<Self> {
+        match code {
+            0 => Some(ModelKind::FixedBase),
+            1 => Some(ModelKind::Rectangular),
+            2 => Some(ModelKind::StickSlip),
+            _ => None,
+        }
+    }
+
+    /// Whether its detector reads the slip acceleration (stick-slip) or the displacement.
+    pub const fn detects_on_acceleration(self) -> bool {
+        matches!(self, ModelKind::StickSlip)
+    }
+
+    /// The stick-slip estimator's settings of this model at a sample rate (the rectangular model
+    /// has none: the stick-slip ones), with identification blocks of ~3.2 ms
+    /// ([`StickSlipConfig::for_rate`]).
+    pub fn stick_slip_config(self, rate_hz: f64) -> StickSlipConfig {
+        match self {
+            ModelKind::FixedBase => FIXED_BASE_CONFIG,
+            ModelKind::Rectangular | ModelKind::StickSlip => STICK_SLIP_CONFIG,
+        }
+        .for_rate(rate_hz)
+    }
+}
+
+impl core::str::FromStr for ModelKind {
+    type Err = &'static str;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        Self::from_name(s).ok_or("expected fixed-base, rectangular or stick-slip")
+    }
+}
+
+/// What a model did with an event.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Pushed {
+    /// The model does not use this event (a stick for the rectangular model, every event for
+    /// the fixed-base model).
+    No,
+    /// Pushed.
+    Yes,
+    /// Pushed with its age clamped to the longest the model keeps (stick-slip model).
+    Clamped,
+}
+
+/// An estimator model as the pipeline drives it. Per batch: [`Model::note_inputs`] for each
+/// sample while the detector runs, then, in runs split at the samples with an event,
+/// [`Model::push`] of the event and [`Model::predict_run`] of the run.
+pub trait Model {
+    /// Which model it is.
+    fn kind(&self) -> ModelKind;
+    /// Give a friction event to the estimator (before its sample's prediction).
+    fn push(&mut self, e: &Event) -> Result<Pushed, Error>;
+    /// Keep the estimator's inputs of sample `i` of a batch (its frame: channels and flags).
+    fn note_inputs(&mut self, i: usize, frame: &Frame);
+    /// Predict `frames`, samples `from ..` of the batch: a run with no event after its first
+    /// sample. Bit for bit the same as one sample at a time.
+    fn predict_run(&mut self, frames: &mut [Frame], from: usize);
+    /// The identified friction coefficient, if the model identifies it and has an estimate.
+    fn mu_estimate(&self) -> Option<MuEstimate>;
+    /// The prediction of an earlier sample revised by later (back-dated) events; `None` when
+    /// the model cannot revise (rectangular) or the sample is out of its history.
+    fn revised(&self, sample: u64) -> Option<f32>;
+}
+
+/// A model built from a [`Plan`] (the same way on the firmware and on the host).
+pub trait FromPlan: Sized {
+    /// The model of `plan`.
+    fn from_plan(plan: &Plan) -> Result<Self, PlanError>;
+}

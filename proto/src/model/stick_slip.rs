@@ -1,0 +1,143 @@
+//! The stick-slip model (and the fixed-base model: the same estimator, no event pushed): the
+//! stick-slip estimator `StickSlipEstimator<f32, F32Poly, H>`, driven by the measured table
+//! acceleration and, for the friction identification and the stuck-phase observer, the measured
+//! top acceleration (NaN, i.e. not used, when the sample is saturated or missing). Slip starts
+//! and reversals are pushed as `push_event(level, age)`, sticks as `push_event(0, age)`; an age
+//! beyond the plan's longest back-dating is clamped to it. A run of samples is predicted with
+//! `update_block` (bit for bit `update` on each sample).
+
+use super::{FromPlan, Model, ModelKind, Pushed};
+use crate::channel::Channel;
+use crate::event::Event;
+use crate::flags;
+use crate::frame::Frame;
+use crate::pipeline::BATCH;
+use crate::plan::{Plan, PlanError};
+use ssvr_core::math::F32Poly;
+use ssvr_core::stick_slip_estimator::{MuEstimate, StickSlipCoefficients, StickSlipEstimator};
+use ssvr_core::Error;
+
+/// The stick-slip estimator with storage for `H` samples of history.
+pub type Estimator<const H: usize> = StickSlipEstimator<f32, F32Poly, H>;
+
+/// The stick-slip model (events on) or the fixed-base model (events off).
+#[derive(Debug, Clone)]
+pub struct StickSlipModel<const H: usize> {
+    est: Estimator<H>,
+    events: bool,
+    max_age: f32,
+    table: [f32; BATCH],
+    top: [f32; BATCH],
+    pred: [f32; BATCH],
+}
+
+/// The estimator's inputs of a sample: the table acceleration, and the top acceleration (NaN
+/// when the sample is saturated or missing).
+#[inline(always)]
+fn inputs(f: &Frame) -> (f32, f32) {
+    let top = if f.flags & (flags::SATURATED | flags::MISSING) == 0 {
+        f.channels[Channel::TopAccel.index()]
+    } else {
+        f32::NAN
+    };
+    (f.channels[Channel::TableAccel.index()], top)
+}
+
+impl<const H: usize> StickSlipModel<H> {
+    /// The model on an estimator: `events` false is the fixed-base model; events older than
+    /// `max_age` samples are pushed with that age.
+    pub fn new(est: Estimator<H>, events: bool, max_age: f32) -> Self {
+        Self {
+            est,
+            events,
+            max_age,
+            table: [0.0; BATCH],
+            top: [0.0; BATCH],
+            pred: [0.0; BATCH],
+        }
+    }
+
+    /// The estimator.
+    pub fn estimator(&self) -> &Estimator<H> {
+        &self.est
+    }
+}
+
+impl<const H: usize> FromPlan for StickSlipModel<H> {
+    /// The estimator restored from the plan's coefficients (computed in f64 and rounded to f32
+    /// when the plan was made: the firmware needs no f64 start-up code), with the plan's
+    /// settings and history.
+    fn from_plan(plan: &Plan) -> Result<Self, PlanError> {
+        let c = StickSlipCoefficients::from_bits(&plan.coefficients).ok_or(PlanError::Words)?;
+        let est = Estimator::<H>::from_coefficients(c, plan.stick_slip, plan.history)
+            .map_err(PlanError::Core)?;
+        Ok(Self::new(
+            est,
+            plan.model == ModelKind::StickSlip,
+            plan.max_age as f32,
+        ))
+    }
+}
+
+impl<const H: usize> Model for StickSlipModel<H> {
+    fn kind(&self) -> ModelKind {
+        if self.events {
+            ModelKind::StickSlip
+        } else {
+            ModelKind::FixedBase
+        }
+    }
+
+    #[inline]
+    fn push(&mut self, e: &Event) -> Result<Pushed, Error> {
+        if !self.events {
+            return Ok(Pushed::No);
+        }
+        let phase = if e.is_stick() { 0 } else { e.level };
+        if e.age_samples > self.max_age {
+            self.est.push_event(phase, self.max_age)?;
+            Ok(Pushed::Clamped)
+        } else {
+            self.est.push_event(phase, e.age_samples)?;
+            Ok(Pushed::Yes)
+        }
+    }
+
+    #[inline(always)]
+    fn note_inputs(&mut self, i: usize, frame: &Frame) {
+        if let (Some(u), Some(y)) = (self.table.get_mut(i), self.top.get_mut(i)) {
+            (*u, *y) = inputs(frame);
+        }
+    }
+
+    #[inline(always)]
+    fn predict_run(&mut self, frames: &mut [Frame], from: usize) {
+        let to = from + frames.len();
+        let (Some(table), Some(top), Some(pred)) = (
+            self.table.get(from..to),
+            self.top.get(from..to),
+            self.pred.get_mut(from..to),
+        ) else {
+            return;
+        };
+        if self.est.update_block(table, top, pred).is_ok() {
+            for (f, &p) in frames.iter_mut().zip(pred.iter()) {
+                f.prediction = p;
+            }
+        } else {
+            // (Not reached: the slices are equally long.)
+            for f in frames.iter_mut() {
+                let (u, y) = inputs(f);
+                f.prediction = self.est.update(u, y);
+            }
+        }
+    }
+
+    fn mu_estimate(&self) -> Option<MuEstimate> {
+        self.est.mu_estimate()
+    }
+
+    fn revised(&self, sample: u64) -> Option<f32> {
+        self.est.prediction_at(sample)
+    }
+}

@@ -1,0 +1,242 @@
+//! The per-sample pipeline step, the one the firmware runs and the host runs for `host-sim run`
+//! and to check the firmware: flag a sample, run the friction-event detector on it, push its
+//! event to the model, predict.
+//!
+//! Samples are processed in batches of at most [`BATCH`] ([`Pipeline::step_batch`]); the result
+//! is that of processing them one at a time ([`Pipeline::step`] is a batch of one), in this
+//! order: steps 1–2 on every sample of the batch first, then steps 3–4 over the batch in runs
+//! split at the samples with an event (a model's prediction of a run is its per-sample
+//! prediction on each sample, bit for bit):
+//!
+//! 1. flags: `NOT_FINITE` if a channel is NaN/inf; `MISSING` with `ADC_ERROR`; the displacement
+//!    is unusable (`DISP_INVALID`) if the sample is missing, the displacement is not finite,
+//!    flagged saturated upstream, or at or beyond the displacement full scale;
+//! 2. the detector processes its input ([`crate::DetectorInput::of`]; NaN when unusable);
+//!    its event, or with [`EventSource::Log`] the sample's logged reversal, is the sample's;
+//! 3. the event goes to the model ([`Model::push`]) before the sample's prediction: flags
+//!    `EVENT_PUSHED` or `EVENT_REJECTED`;
+//! 4. the model predicts the sample (always, valid or not, to keep time).
+
+use crate::channel::Channel;
+use crate::detector::EventDetector;
+use crate::event::{Event, EventKind};
+use crate::flags;
+use crate::frame::{Frame, Sample};
+use crate::model::{Model, Pushed};
+use ssvr_core::stick_slip_estimator::MuEstimate;
+
+/// Samples per batch: 16 (1.6 ms at 10 kHz) brings the stick-slip estimator's steady-state
+/// sample under 40 M4F instructions (each run's set-up and the identification blocks spread
+/// over the run); it is also the board's latency in samples.
+pub const BATCH: usize = 16;
+const _: () = assert!(
+    BATCH >= 1 && BATCH <= 32,
+    "events of a batch are a u32 mask"
+);
+
+/// Where the model's friction events come from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EventSource {
+    /// The detector (the firmware's path).
+    Detector,
+    /// The reversals carried by the sensor log's records (the QEMU image's test hook; the
+    /// detector still runs, its events are not used).
+    Log,
+}
+
+/// Counters of a run.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Stats {
+    /// Samples processed (model predictions).
+    pub samples: u32,
+    /// Samples with any of [`flags::INVALID`].
+    pub invalid: u32,
+    /// Frames dropped because the streaming queue was full (counted by the streaming side).
+    pub dropped: u32,
+    /// Friction events (slip starts, reversals, sticks; or logged reversals).
+    pub events: u32,
+    /// Events pushed to and accepted by the model (sticks too, for the stick-slip model).
+    pub pushed: u32,
+    /// Events the model rejected.
+    pub rejected: u32,
+    /// Sticks among the events.
+    pub sticks: u32,
+    /// Events pushed with their age clamped to the model's history.
+    pub clamped: u32,
+}
+
+/// The detector, the model and the sample clock.
+#[derive(Debug, Clone)]
+pub struct Pipeline<M, D> {
+    model: M,
+    detector: D,
+    source: EventSource,
+    disp_range_m: f32,
+    index: u32,
+    /// Counters.
+    pub stats: Stats,
+}
+
+impl<M: Model, D: EventDetector> Pipeline<M, D> {
+    /// Start at sample 0; a displacement at or beyond ±`disp_range_m` is unusable.
+    pub fn new(model: M, detector: D, source: EventSource, disp_range_m: f32) -> Self {
+        Self {
+            model,
+            detector,
+            source,
+            disp_range_m,
+            index: 0,
+            stats: Stats::default(),
+        }
+    }
+
+    /// Process a batch of samples (at most [`BATCH`], and at most `frames.len()`; the rest of
+    /// `samples` is ignored) into `frames`. Returns the number of frames written. Never panics.
+    pub fn step_batch(&mut self, samples: &[Sample], frames: &mut [Frame]) -> usize {
+        let (mut n, mut events) = (0, 0u32);
+        for (s, fr) in samples.iter().zip(frames.iter_mut()).take(BATCH) {
+            *fr = self.detect(s);
+            if fr.event.is_some() {
+                events |= 1 << n;
+            }
+            self.model.note_inputs(n, fr);
+            n += 1;
+        }
+        let mut i = 0;
+        while i < n {
+            if let Some(fr) = frames.get_mut(i) {
+                if let Some(e) = fr.event {
+                    fr.flags |= self.push(&e);
+                }
+            }
+            // The run up to the next event (bit j of `events`: sample j has one).
+            let later = events.checked_shr(i as u32 + 1).unwrap_or(0);
+            let end = if later == 0 {
+                n
+            } else {
+                i + 1 + later.trailing_zeros() as usize
+            };
+            if let Some(run) = frames.get_mut(i..end) {
+                self.model.predict_run(run, i);
+            }
+            i = end;
+        }
+        n
+    }
+
+    /// One sample (a batch of one).
+    pub fn step(&mut self, s: &Sample) -> Frame {
+        let mut f = [Frame::EMPTY];
+        self.step_batch(core::slice::from_ref(s), &mut f);
+        f[0]
+    }
+
+    /// A sample's flags, its event (counted) and its frame (index assigned, no prediction yet).
+    #[inline(always)]
+    fn detect(&mut self, s: &Sample) -> Frame {
+        let mut f = s.flags & flags::ACQUISITION;
+        if f & flags::ADC_ERROR != 0 {
+            f |= flags::MISSING;
+        }
+        if s.channels.iter().any(|c| !c.is_finite()) {
+            f |= flags::NOT_FINITE;
+        }
+        let disp = s.channels[Channel::Displacement.index()];
+        if f & flags::MISSING != 0 || !disp.is_finite() || disp.abs() >= self.disp_range_m {
+            f |= flags::DISP_INVALID;
+        }
+        if f & flags::INVALID != 0 {
+            self.stats.invalid = self.stats.invalid.wrapping_add(1);
+        }
+        let detected = self.detector.process(D::INPUT.of(&s.channels, f));
+        let event = match self.source {
+            EventSource::Detector => detected.as_ref().map(Event::from_detector),
+            EventSource::Log => s.reversal.map(|r| Event {
+                kind: EventKind::Log,
+                level: r.level,
+                age_samples: r.age_samples,
+            }),
+        };
+        if let Some(e) = &event {
+            self.stats.events = self.stats.events.wrapping_add(1);
+            if e.is_stick() {
+                self.stats.sticks = self.stats.sticks.wrapping_add(1);
+            }
+        }
+        let frame = Frame {
+            index: self.index,
+            flags: f,
+            event,
+            channels: s.channels,
+            prediction: 0.0,
+        };
+        self.index = self.index.wrapping_add(1);
+        self.stats.samples = self.stats.samples.wrapping_add(1);
+        frame
+    }
+
+    /// Push an event to the model (before its sample's prediction): the flags it adds.
+    fn push(&mut self, e: &Event) -> u8 {
+        match self.model.push(e) {
+            Ok(Pushed::No) => 0,
+            Ok(p) => {
+                self.stats.pushed = self.stats.pushed.wrapping_add(1);
+                if p == Pushed::Clamped {
+                    self.stats.clamped = self.stats.clamped.wrapping_add(1);
+                }
+                flags::EVENT_PUSHED
+            }
+            Err(_) => {
+                self.stats.rejected = self.stats.rejected.wrapping_add(1);
+                flags::EVENT_REJECTED
+            }
+        }
+    }
+
+    /// The model.
+    pub fn model(&self) -> &M {
+        &self.model
+    }
+
+    /// The detector.
+    pub fn detector(&self) -> &D {
+        &self.detector
+    }
+}
+
+/// A pipeline whatever its model and detector (the host picks them at run time).
+pub trait Step {
+    /// [`Pipeline::step_batch`].
+    fn step_batch(&mut self, samples: &[Sample], frames: &mut [Frame]) -> usize;
+    /// [`Pipeline::step`].
+    fn step(&mut self, s: &Sample) -> Frame;
+    /// The counters.
+    fn stats(&self) -> Stats;
+    /// The model's identified friction coefficient.
+    fn mu_estimate(&self) -> Option<MuEstimate>;
+    /// The model's revised prediction of an earlier sample ([`Model::revised`]).
+    fn revised(&self, sample: u64) -> Option<f32>;
+    /// The detector's longest back-dating (samples).
+    fn max_age_samples(&self) -> usize;
+}
+
+impl<M: Model, D: EventDetector> Step for Pipeline<M, D> {
+    fn step_batch(&mut self, samples: &[Sample], frames: &mut [Frame]) -> usize {
+        Pipeline::step_batch(self, samples, frames)
+    }
+    fn step(&mut self, s: &Sample) -> Frame {
+        Pipeline::step(self, s)
+    }
+    fn stats(&self) -> Stats {
+        self.stats
+    }
+    fn mu_estimate(&self) -> Option<MuEstimate> {
+        self.model.mu_estimate()
+    }
+    fn revised(&self, sample: u64) -> Option<f32> {
+        self.model.revised(sample)
+    }
+    fn max_age_samples(&self) -> usize {
+        self.detector.max_age_samples()
+    }
+}

@@ -1,0 +1,438 @@
+//! The plan: what a specimen (as the controller is told it) and a model turn into for the
+//! pipeline: the detector's settings, ring and longest back-dating, the stick-slip estimator's
+//! settings, history and coefficients. Made once on the host ([`Plan::new`], by the scene's
+//! users: `host-sim` and the firmware's build script), embedded in the firmware as words
+//! ([`Plan::to_words`], restored by [`Plan::from_words`]: no f64 start-up code), and identified
+//! by a digest ([`Plan::digest`]) the firmware reports so the host can check the image runs
+//! the plan it expects.
+
+use crate::model::ModelKind;
+use ssvr_core::duhamel_recursion::Estimator32;
+use ssvr_core::phase_detector::PhaseDetectorConfig;
+use ssvr_core::reversal_detector::DetectorConfig;
+use ssvr_core::stick_slip_estimator::{
+    history_for_age, storage_for, StickSlipCoefficients, StickSlipConfig,
+};
+use ssvr_core::{Error, Structure, StructureParams};
+
+/// The longest stick-slip history (samples) a plan may ask for: the host's storage.
+pub const MAX_HISTORY: usize = 2048;
+
+/// Number of stick-slip coefficient words.
+pub const COEFFICIENT_WORDS: usize = StickSlipCoefficients::<f32>::BITS;
+
+/// What the controller is told about the specimen and its sensors.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Specimen {
+    /// Structure parameters.
+    pub structure: StructureParams,
+    /// Static (breakaway) friction coefficient (≥ kinetic).
+    pub static_friction_coefficient: f64,
+    /// Sample rate (Hz).
+    pub sample_rate_hz: f64,
+    /// Displacement sensor noise RMS (m): the displacement detector's settings.
+    pub disp_noise_rms_m: f64,
+    /// Accelerometer noise RMS (m/s²): the slip-acceleration detector's settings.
+    pub accel_noise_rms_m_s2: f64,
+    /// Displacement full scale ± (m): a sample at or beyond it is unusable.
+    pub disp_range_m: f64,
+}
+
+/// The friction-event detector of a plan.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum DetectorPlan {
+    /// `ReversalDetector` on the displacement (rectangular, fixed-base).
+    Displacement(DetectorConfig),
+    /// `PhaseDetector` on the slip acceleration (stick-slip).
+    SlipAcceleration(PhaseDetectorConfig),
+}
+
+/// Why a plan cannot be made or restored.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PlanError {
+    /// A parameter is rejected by the library (structure, rate, detector or estimator settings).
+    Core(Error),
+    /// The stick-slip history needed (samples) exceeds [`MAX_HISTORY`] or the storage.
+    History(usize),
+    /// The plan's words are malformed (wrong length, version, or a value out of range).
+    Words,
+    /// The detector type does not match the plan's detector or ring.
+    Detector,
+}
+
+impl From<Error> for PlanError {
+    fn from(e: Error) -> Self {
+        PlanError::Core(e)
+    }
+}
+
+impl core::fmt::Display for PlanError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            PlanError::Core(e) => write!(f, "{e}"),
+            PlanError::History(h) => write!(
+                f,
+                "the stick-slip history of {h} samples (the detector's longest back-dating) \
+                 exceeds {MAX_HISTORY}"
+            ),
+            PlanError::Words => f.write_str("malformed plan words"),
+            PlanError::Detector => f.write_str("the detector does not match the plan"),
+        }
+    }
+}
+
+/// The plan of a specimen and a model.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Plan {
+    /// The model.
+    pub model: ModelKind,
+    /// The specimen it was made for.
+    pub specimen: Specimen,
+    /// The detector's settings: `for_noise` of the specimen's sensors,
+    /// `with_friction(static, kinetic)`.
+    pub detector: DetectorPlan,
+    /// The detector's ring (a power of two holding its fit windows: its `min_ring`).
+    pub ring: usize,
+    /// The detector's longest back-dating with this ring (samples); the stick-slip model clamps
+    /// older events to it.
+    pub max_age: usize,
+    /// The stick-slip estimator's history: `max_age + 2`.
+    pub history: usize,
+    /// The stick-slip estimator's storage that makes its steady state cheapest
+    /// (`storage_for(history, identify_every)`).
+    pub storage: usize,
+    /// The stick-slip estimator's settings ([`ModelKind::stick_slip_config`]).
+    pub stick_slip: StickSlipConfig,
+    /// The stick-slip estimator's coefficients in f32 (`StickSlipCoefficients::to_bits`).
+    pub coefficients: [u32; COEFFICIENT_WORDS],
+}
+
+/// Version of the word layout ([`Plan::to_words`]).
+pub const WORDS_VERSION: u32 = 1;
+/// Length of a plan's words.
+pub const WORDS: usize = 42 + COEFFICIENT_WORDS;
+
+impl Plan {
+    /// The plan of `specimen` and `model`: every setting validated by the library.
+    pub fn new(specimen: Specimen, model: ModelKind) -> Result<Self, PlanError> {
+        let s = &specimen;
+        let structure = Structure::new(s.structure)?;
+        let mu = s.structure.friction_coefficient;
+        let rate = s.sample_rate_hz;
+        Estimator32::new(&structure, rate)?;
+        let (detector, ring, max_age) = if model.detects_on_acceleration() {
+            let d = PhaseDetectorConfig::for_noise(s.accel_noise_rms_m_s2)?
+                .with_friction(s.static_friction_coefficient, mu);
+            (
+                DetectorPlan::SlipAcceleration(d),
+                d.min_ring(),
+                d.max_age_samples(),
+            )
+        } else {
+            let d = DetectorConfig::for_noise(s.disp_noise_rms_m, rate)?
+                .with_friction(s.static_friction_coefficient, mu);
+            let ring = d.min_ring();
+            (DetectorPlan::Displacement(d), ring, d.max_age_samples(ring))
+        };
+        let history = history_for_age(max_age);
+        if history > MAX_HISTORY {
+            return Err(PlanError::History(history));
+        }
+        let stick_slip = model.stick_slip_config(rate);
+        let coefficients = StickSlipCoefficients::<f32>::new(&structure, rate)?;
+        Ok(Self {
+            model,
+            specimen,
+            detector,
+            ring,
+            max_age,
+            history,
+            storage: storage_for(history, stick_slip.identify_every),
+            stick_slip,
+            coefficients: coefficients.to_bits(),
+        })
+    }
+
+    /// The displacement full scale in f32.
+    pub fn disp_range_m(&self) -> f32 {
+        self.specimen.disp_range_m as f32
+    }
+
+    /// The plan as words (version [`WORDS_VERSION`]): every field, floats by their bits.
+    pub fn to_words(&self) -> [u32; WORDS] {
+        let mut w = Words::default();
+        w.u32(WORDS_VERSION);
+        w.u32(self.model as u32);
+        let s = &self.specimen;
+        let p = &s.structure;
+        for v in [
+            p.m1_kg,
+            p.m2_kg,
+            p.natural_frequency_hz,
+            p.damping_ratio,
+            p.friction_coefficient,
+            p.gravity_m_s2,
+            s.static_friction_coefficient,
+            s.sample_rate_hz,
+            s.disp_noise_rms_m,
+            s.accel_noise_rms_m_s2,
+            s.disp_range_m,
+        ] {
+            w.f64(v);
+        }
+        match self.detector {
+            DetectorPlan::Displacement(d) => {
+                w.u32(0);
+                w.u32(d.hysteresis_m.to_bits());
+                w.usize(d.fit_half);
+                w.usize(d.stick_samples);
+                w.u32(0);
+                w.u32(d.cubic_breakaway as u32);
+            }
+            DetectorPlan::SlipAcceleration(d) => {
+                w.u32(1);
+                w.u32(d.threshold_m_s2.to_bits());
+                w.usize(d.confirm_samples);
+                w.usize(d.search_samples);
+                w.usize(d.stall_samples);
+                w.u32(d.jump_breakaway as u32);
+            }
+        }
+        w.usize(self.ring);
+        w.usize(self.max_age);
+        w.usize(self.history);
+        w.usize(self.storage);
+        let c = &self.stick_slip;
+        w.u32(c.identify_mu as u32);
+        w.u32(c.use_identified_mu as u32);
+        w.f64(c.forgetting);
+        w.u32(c.min_samples);
+        w.u32(c.identify_every);
+        w.f64(c.observer_bandwidth);
+        for &b in &self.coefficients {
+            w.u32(b);
+        }
+        w.0
+    }
+
+    /// The plan of its words ([`Self::to_words`]).
+    pub fn from_words(words: &[u32; WORDS]) -> Result<Self, PlanError> {
+        let mut r = Reader { w: words, i: 0 };
+        if r.u32() != WORDS_VERSION {
+            return Err(PlanError::Words);
+        }
+        let model = u8::try_from(r.u32())
+            .ok()
+            .and_then(ModelKind::from_code)
+            .ok_or(PlanError::Words)?;
+        let structure = StructureParams {
+            m1_kg: r.f64(),
+            m2_kg: r.f64(),
+            natural_frequency_hz: r.f64(),
+            damping_ratio: r.f64(),
+            friction_coefficient: r.f64(),
+            gravity_m_s2: r.f64(),
+        };
+        let specimen = Specimen {
+            structure,
+            static_friction_coefficient: r.f64(),
+            sample_rate_hz: r.f64(),
+            disp_noise_rms_m: r.f64(),
+            accel_noise_rms_m_s2: r.f64(),
+            disp_range_m: r.f64(),
+        };
+        let kind = r.u32();
+        let (x, a, b, c, flag) = (r.u32(), r.usize(), r.usize(), r.usize(), r.u32() != 0);
+        let detector = match kind {
+            0 => DetectorPlan::Displacement(DetectorConfig {
+                hysteresis_m: f32::from_bits(x),
+                fit_half: a,
+                stick_samples: b,
+                cubic_breakaway: flag,
+            }),
+            1 => DetectorPlan::SlipAcceleration(PhaseDetectorConfig {
+                threshold_m_s2: f32::from_bits(x),
+                confirm_samples: a,
+                search_samples: b,
+                stall_samples: c,
+                jump_breakaway: flag,
+            }),
+            _ => return Err(PlanError::Words),
+        };
+        let (ring, max_age, history, storage) = (r.usize(), r.usize(), r.usize(), r.usize());
+        let stick_slip = StickSlipConfig {
+            identify_mu: r.u32() != 0,
+            use_identified_mu: r.u32() != 0,
+            forgetting: r.f64(),
+            min_samples: r.u32(),
+            identify_every: r.u32(),
+            observer_bandwidth: r.f64(),
+        };
+        let mut coefficients = [0u32; COEFFICIENT_WORDS];
+        for c in coefficients.iter_mut() {
+            *c = r.u32();
+        }
+        if r.i != WORDS {
+            return Err(PlanError::Words);
+        }
+        Ok(Self {
+            model,
+            specimen,
+            detector,
+            ring,
+            max_age,
+            history,
+            storage,
+            stick_slip,
+            coefficients,
+        })
+    }
+
+    /// FNV-1a (32 bit) of the plan's words: the firmware reports it, the host compares it.
+    pub fn digest(&self) -> u32 {
+        let mut h: u32 = 0x811c_9dc5;
+        for w in self.to_words() {
+            for b in w.to_le_bytes() {
+                h ^= u32::from(b);
+                h = h.wrapping_mul(0x0100_0193);
+            }
+        }
+        h
+    }
+}
+
+/// Writes words in order.
+struct Words([u32; WORDS], usize);
+
+impl Default for Words {
+    fn default() -> Self {
+        Words([0; WORDS], 0)
+    }
+}
+
+impl Words {
+    fn u32(&mut self, v: u32) {
+        if let Some(s) = self.0.get_mut(self.1) {
+            *s = v;
+        }
+        self.1 += 1;
+    }
+    fn usize(&mut self, v: usize) {
+        self.u32(u32::try_from(v).unwrap_or(u32::MAX));
+    }
+    fn f64(&mut self, v: f64) {
+        let b = v.to_bits();
+        self.u32(b as u32);
+        self.u32((b >> 32) as u32);
+    }
+}
+
+/// Reads words in order (zero past the end; the caller checks the count).
+struct Reader<'a> {
+    w: &'a [u32; WORDS],
+    i: usize,
+}
+
+impl Reader<'_> {
+    fn u32(&mut self) -> u32 {
+        let v = self.w.get(self.i).copied().unwrap_or(0);
+        self.i += 1;
+        v
+    }
+    fn usize(&mut self) -> usize {
+        self.u32() as usize
+    }
+    fn f64(&mut self) -> f64 {
+        let lo = u64::from(self.u32());
+        let hi = u64::from(self.u32());
+        f64::from_bits(lo | (hi << 32))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn specimen(rate: f64) -> Specimen {
+        Specimen {
+            structure: StructureParams {
+                m1_kg: 29.5,
+                m2_kg: 1.75,
+                natural_frequency_hz: 7.0,
+                damping_ratio: 0.05,
+                friction_coefficient: 0.2,
+                gravity_m_s2: 9.80665,
+            },
+            static_friction_coefficient: 0.25,
+            sample_rate_hz: rate,
+            disp_noise_rms_m: 1e-6,
+            accel_noise_rms_m_s2: 5e-3,
+            disp_range_m: 0.05,
+        }
+    }
+
+    #[test]
+    fn words_round_trip_for_every_model_and_rate() {
+        for rate in [200.0, 1000.0, 10_000.0, 100_000.0] {
+            for m in ModelKind::ALL {
+                let p = match Plan::new(specimen(rate), m) {
+                    Ok(p) => p,
+                    Err(PlanError::History(h)) => {
+                        assert!(h > MAX_HISTORY);
+                        continue;
+                    }
+                    Err(e) => panic!("{m:?} at {rate} Hz: {e}"),
+                };
+                let w = p.to_words();
+                assert_eq!(Plan::from_words(&w), Ok(p), "{m:?} at {rate} Hz");
+                assert_eq!(p.history, p.max_age + 2);
+                assert!(p.storage > p.history);
+                assert!(p.ring.is_power_of_two());
+            }
+        }
+    }
+
+    #[test]
+    fn the_digest_changes_with_any_setting() {
+        let a = Plan::new(specimen(10_000.0), ModelKind::StickSlip).unwrap();
+        let mut s = specimen(10_000.0);
+        s.accel_noise_rms_m_s2 = 6e-3;
+        let b = Plan::new(s, ModelKind::StickSlip).unwrap();
+        let c = Plan::new(specimen(10_000.0), ModelKind::FixedBase).unwrap();
+        assert_ne!(a.digest(), b.digest());
+        assert_ne!(a.digest(), c.digest());
+        assert_eq!(
+            a.digest(),
+            Plan::new(specimen(10_000.0), ModelKind::StickSlip)
+                .unwrap()
+                .digest()
+        );
+    }
+
+    #[test]
+    fn malformed_words_are_errors() {
+        let p = Plan::new(specimen(1000.0), ModelKind::Rectangular).unwrap();
+        let mut w = p.to_words();
+        w[0] = 99;
+        assert_eq!(Plan::from_words(&w), Err(PlanError::Words));
+        let mut w = p.to_words();
+        w[1] = 7;
+        assert_eq!(Plan::from_words(&w), Err(PlanError::Words));
+    }
+
+    #[test]
+    fn bad_specimens_are_typed_errors() {
+        let mut s = specimen(1000.0);
+        s.structure.damping_ratio = 1.5;
+        assert!(matches!(
+            Plan::new(s, ModelKind::Rectangular),
+            Err(PlanError::Core(_))
+        ));
+        let mut s = specimen(1000.0);
+        s.disp_noise_rms_m = f64::NAN;
+        assert!(matches!(
+            Plan::new(s, ModelKind::Rectangular),
+            Err(PlanError::Core(_))
+        ));
+    }
+}
