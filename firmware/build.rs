@@ -24,6 +24,7 @@
 //! Rebuilds track the scene and the model: `rerun-if-env-changed=SSVR_SCENE`, `SSVR_MODEL` and
 //! `rerun-if-changed=<scene>`.
 
+use ssvr_proto::{DetectorPlan, ModelKind, Plan, Specimen};
 use std::env;
 use std::fmt::Write as _;
 use std::fs;
@@ -58,20 +59,17 @@ fn main() {
     }
 
     println!("cargo:rerun-if-env-changed=SSVR_MODEL");
-    println!(
-        "cargo::rustc-check-cfg=cfg(ssvr_model, values(\"fixed_base\", \"rectangular\", \"stick_slip\"))"
-    );
     let model = match env::var("SSVR_MODEL") {
-        Err(env::VarError::NotPresent) => "rectangular".to_string(),
-        Ok(m) if m.is_empty() => "rectangular".to_string(),
-        Ok(m) if MODELS.contains(&m.as_str()) => m,
-        Ok(m) => panic!("SSVR_MODEL = {m:?}: expected one of {MODELS:?} (default rectangular)"),
+        Err(env::VarError::NotPresent) => ModelKind::Rectangular,
+        Ok(m) if m.is_empty() => ModelKind::Rectangular,
+        Ok(m) => ModelKind::from_name(&m).unwrap_or_else(|| {
+            panic!(
+                "SSVR_MODEL = {m:?}: expected fixed-base, rectangular or stick-slip (default \
+                 rectangular)"
+            )
+        }),
         Err(e) => panic!("SSVR_MODEL: {e}"),
     };
-    println!(
-        "cargo::rustc-cfg=ssvr_model=\"{}\"",
-        model.replace('-', "_")
-    );
 
     println!("cargo:rerun-if-env-changed=SSVR_SCENE");
     let path = match env::var_os("SSVR_SCENE") {
@@ -91,37 +89,15 @@ fn main() {
             .join("table1.toml"),
     };
     println!("cargo:rerun-if-changed={}", path.display());
-    let scene = Scene::read(&path, &model);
-    let mut consts = scene.common_consts();
-    consts.push_str(&scene.model_consts(&model));
-    fs::write(out.join("scene.rs"), consts).expect("write OUT_DIR/scene.rs");
+    let scene = Scene::read(&path);
+    let plan = Plan::new(scene.specimen(), model)
+        .unwrap_or_else(|e| panic!("scene {}: {e} (model {})", path.display(), model.name()));
+    fs::write(out.join("plan.rs"), plan_consts(&path, &plan)).expect("write OUT_DIR/plan.rs");
     if board {
         fs::write(out.join("scene_board.rs"), scene.board_consts())
             .expect("write OUT_DIR/scene_board.rs");
     }
 }
-
-/// The estimator models (`SSVR_MODEL`).
-const MODELS: [&str; 3] = ["fixed-base", "rectangular", "stick-slip"];
-
-/// The stick-slip estimator's settings in the firmware (host-sim's `model::STICK_SLIP_CONFIG`,
-/// `for_rate` of the scene's rate, which `host-sim qemu` checks against the firmware's `model`
-/// message): μ identified and adopted at the start of each sliding episode.
-const STICK_SLIP: ssvr_core::stick_slip_estimator::StickSlipConfig =
-    ssvr_core::stick_slip_estimator::StickSlipConfig {
-        use_identified_mu: true,
-        ..ssvr_core::stick_slip_estimator::StickSlipConfig::DEFAULT
-    };
-
-/// The fixed-base model's settings (host-sim's `model::FIXED_BASE_CONFIG`): no identification
-/// (the estimator never leaves its stuck phase, so identifying μ would change nothing but cost
-/// instructions on every sample).
-const FIXED_BASE: ssvr_core::stick_slip_estimator::StickSlipConfig =
-    ssvr_core::stick_slip_estimator::StickSlipConfig {
-        identify_mu: false,
-        observer_bandwidth: 0.0,
-        ..STICK_SLIP
-    };
 
 const CHANNELS: [&str; 4] = ["table_accel", "base_accel", "top_accel", "displacement"];
 /// host-sim's defaults for a scene without a `[sensors]` table.
@@ -130,12 +106,48 @@ const DEFAULT_DISP_RANGE_M: f64 = 0.05;
 const DEFAULT_DISP_NOISE_RMS_M: f64 = 1e-6;
 const DEFAULT_ACCEL_NOISE_RMS_M_S2: f64 = 5e-3;
 
-/// The model's friction-event detector (host-sim's `model::Detector::for_model`): the stick-slip
-/// model times sticks and slip starts from the slip acceleration (base − table accelerometer),
-/// the others use the reversal detector on the displacement.
-enum DetectorChoice {
-    Displacement(ssvr_core::reversal_detector::DetectorConfig),
-    Acceleration(ssvr_core::phase_detector::PhaseDetectorConfig),
+/// `OUT_DIR/plan.rs`: the plan's words and digest, the detector's ring, the stick-slip storage,
+/// and the model's and detector's types (only that model's code is compiled in).
+fn plan_consts(path: &Path, plan: &Plan) -> String {
+    let mut words = String::new();
+    for (i, w) in plan.to_words().iter().enumerate() {
+        if i % 8 == 0 {
+            words.push_str("\n   ");
+        }
+        let _ = write!(words, " {w:#010x},");
+    }
+    let model = match plan.model {
+        ModelKind::Rectangular => "ssvr_proto::RectangularModel".to_string(),
+        ModelKind::StickSlip | ModelKind::FixedBase => {
+            "ssvr_proto::StickSlipModel<STORAGE>".to_string()
+        }
+    };
+    let detector = match plan.detector {
+        DetectorPlan::Displacement(_) => "ssvr_proto::DisplacementDetector<RING>",
+        DetectorPlan::SlipAcceleration(_) => "ssvr_proto::AccelerationDetector<RING>",
+    };
+    format!(
+        "// Generated by build.rs from {scene:?}. Do not edit.\n\
+         /// The scene the plan was made from (`SSVR_SCENE`).\n\
+         pub const SCENE_PATH: &str = {scene:?};\n\
+         /// The plan's words (`ssvr_proto::Plan::to_words`; model {name}).\n\
+         pub const PLAN_WORDS: [u32; ssvr_proto::plan::WORDS] = [{words}\n];\n\
+         /// The plan's digest (`ssvr_proto::Plan::digest`).\n\
+         pub const PLAN_DIGEST: u32 = {digest:#010x};\n\
+         /// The detector's ring (samples).\n\
+         pub const RING: usize = {ring};\n\
+         /// The stick-slip estimator's storage (samples; `storage_for` the plan's history).\n\
+         pub const STORAGE: usize = {storage};\n\
+         /// The model of the plan.\n\
+         pub type Model = {model};\n\
+         /// The friction-event detector of the plan.\n\
+         pub type Detector = {detector};\n",
+        scene = path.display().to_string(),
+        name = plan.model.name(),
+        digest = plan.digest(),
+        ring = plan.ring,
+        storage = plan.storage,
+    )
 }
 
 /// The parsed scene. The lookup is lenient about layout: every key is searched for anywhere in
@@ -151,10 +163,6 @@ struct Scene {
     accel_noise: f64,
     accel_range: f64,
     disp_range: f64,
-    detector: DetectorChoice,
-    ring: usize,
-    /// The detector's longest back-dating (samples).
-    max_age: usize,
 }
 
 fn find<'a>(v: &'a Value, keys: &[&str]) -> Option<&'a Value> {
@@ -192,57 +200,23 @@ fn need(doc: &Value, section: &str, keys: &[&str], path: &Path) -> f64 {
 }
 
 impl Scene {
-    fn read(path: &Path, model: &str) -> Self {
+    fn read(path: &Path) -> Self {
         let text = fs::read_to_string(path)
             .unwrap_or_else(|e| panic!("cannot read scene {} (SSVR_SCENE): {e}", path.display()));
         let doc: Value = toml::from_str(&text)
             .unwrap_or_else(|e| panic!("scene {} is not valid TOML: {e}", path.display()));
-
         let s = "structure";
         let params = ssvr_core::StructureParams {
-            m1_kg: need(&doc, s, &["m1_kg", "m1", "top_mass_kg"], path),
-            m2_kg: need(&doc, s, &["m2_kg", "m2", "base_mass_kg"], path),
-            natural_frequency_hz: need(
-                &doc,
-                s,
-                &["natural_frequency_hz", "frequency_hz", "f_n_hz", "fn_hz"],
-                path,
-            ),
-            damping_ratio: need(&doc, s, &["damping_ratio", "xi", "zeta"], path),
-            friction_coefficient: need(&doc, s, &["friction_coefficient", "mu"], path),
-            gravity_m_s2: get_f64(&doc, s, &["gravity_m_s2", "g", "gravity"]).unwrap_or(9.80665),
+            m1_kg: need(&doc, s, &["m1_kg"], path),
+            m2_kg: need(&doc, s, &["m2_kg"], path),
+            natural_frequency_hz: need(&doc, s, &["natural_frequency_hz"], path),
+            damping_ratio: need(&doc, s, &["damping_ratio"], path),
+            friction_coefficient: need(&doc, s, &["friction_coefficient"], path),
+            gravity_m_s2: get_f64(&doc, s, &["gravity_m_s2"]).unwrap_or(9.80665),
         };
-        let structure = ssvr_core::Structure::new(params).unwrap_or_else(|e| {
-            panic!(
-                "scene {}: invalid structure: {} ({e:?})",
-                path.display(),
-                e.param().name()
-            )
-        });
-        let mu_static = get_f64(
-            &doc,
-            s,
-            &["static_friction_coefficient", "mu_s", "mu_static"],
-        )
-        .unwrap_or(params.friction_coefficient);
-        assert!(
-            mu_static.is_finite() && mu_static >= params.friction_coefficient,
-            "scene {}: static_friction_coefficient = {mu_static} must be >= friction_coefficient",
-            path.display()
-        );
-        let rate = need(
-            &doc,
-            "sampling",
-            &["rate_hz", "sample_rate_hz", "sampling_rate_hz", "fs_hz"],
-            path,
-        );
-        if let Err(e) = ssvr_core::duhamel_recursion::Estimator32::new(&structure, rate) {
-            panic!(
-                "scene {}: the estimator rejects rate_hz = {rate}: {e:?}",
-                path.display()
-            );
-        }
-
+        let mu_static = get_f64(&doc, s, &["static_friction_coefficient"])
+            .unwrap_or(params.friction_coefficient);
+        let rate = need(&doc, "sampling", &["rate_hz"], path);
         let sensors = doc.get("sensors");
         let sensor = |key: &str, default: f64| {
             sensors
@@ -250,206 +224,28 @@ impl Scene {
                 .and_then(num)
                 .unwrap_or(default)
         };
-        let accel_range = sensor("accel_range_m_s2", DEFAULT_ACCEL_RANGE_M_S2);
-        let disp_range = sensor("disp_range_m", DEFAULT_DISP_RANGE_M);
-        let disp_noise = sensor("disp_noise_rms_m", DEFAULT_DISP_NOISE_RMS_M);
-        for (name, v) in [
-            ("accel_range_m_s2", accel_range),
-            ("disp_range_m", disp_range),
-        ] {
-            assert!(
-                v.is_finite() && v > 0.0,
-                "scene {}: sensors.{name} = {v} must be finite and > 0",
-                path.display()
-            );
-        }
-        let accel_noise = sensor("accel_noise_rms_m_s2", DEFAULT_ACCEL_NOISE_RMS_M_S2);
-        // The same settings as host-sim's detector for this scene and model.
-        let (detector, ring, max_age) = if model == "stick-slip" {
-            let d = ssvr_core::phase_detector::PhaseDetectorConfig::for_noise(accel_noise)
-                .unwrap_or_else(|e| {
-                    panic!(
-                        "scene {}: no phase detector for accel_noise_rms_m_s2 = {accel_noise}: {e:?}",
-                        path.display()
-                    )
-                })
-                .with_friction(mu_static, params.friction_coefficient);
-            (
-                DetectorChoice::Acceleration(d),
-                d.min_ring(),
-                d.max_age_samples(),
-            )
-        } else {
-            let d = ssvr_core::reversal_detector::DetectorConfig::for_noise(disp_noise, rate)
-                .unwrap_or_else(|e| {
-                    panic!(
-                        "scene {}: no reversal detector for disp_noise_rms_m = {disp_noise} at \
-                         {rate} Hz: {e:?}",
-                        path.display()
-                    )
-                })
-                .with_friction(mu_static, params.friction_coefficient);
-            // The detector's ring must hold 2·fit_half + 2 samples; a power of two keeps its
-            // index arithmetic (u64 modulo) a mask on the M4F.
-            let ring = d.min_ring();
-            (
-                DetectorChoice::Displacement(d),
-                ring,
-                d.max_age_samples(ring),
-            )
-        };
         Self {
             path: path.to_path_buf(),
-            doc,
             params,
             mu_static,
             rate,
-            disp_noise,
-            accel_noise,
-            accel_range,
-            disp_range,
-            detector,
-            ring,
-            max_age,
+            disp_noise: sensor("disp_noise_rms_m", DEFAULT_DISP_NOISE_RMS_M),
+            accel_noise: sensor("accel_noise_rms_m_s2", DEFAULT_ACCEL_NOISE_RMS_M_S2),
+            accel_range: sensor("accel_range_m_s2", DEFAULT_ACCEL_RANGE_M_S2),
+            disp_range: sensor("disp_range_m", DEFAULT_DISP_RANGE_M),
+            doc,
         }
     }
 
-    /// Consts of both images.
-    fn common_consts(&self) -> String {
-        let p = &self.params;
-        // The detector settings as a struct literal through their `Debug` form (field names and
-        // round-trip exact numbers), so new fields of `DetectorConfig` need no change here; the
-        // same text is reported at run time for the host to compare.
-        let (debug, module, config, ty, input) = match &self.detector {
-            DetectorChoice::Displacement(d) => (
-                format!("{d:?}"),
-                "reversal_detector",
-                "DetectorConfig",
-                "ReversalDetector",
-                "the base-to-table displacement (m)",
-            ),
-            DetectorChoice::Acceleration(d) => (
-                format!("{d:?}"),
-                "phase_detector",
-                "PhaseDetectorConfig",
-                "PhaseDetector",
-                "the slip acceleration, base minus table accelerometer (m/s²)",
-            ),
-        };
-        format!(
-            "// Generated by build.rs from {scene:?}. Do not edit.\n\
-             /// Scene the constants come from (`SSVR_SCENE`).\n\
-             pub const SCENE_PATH: &str = {scene:?};\n\
-             /// Sample rate (Hz) of the estimator and the detector.\n\
-             pub const SAMPLE_RATE_HZ: f64 = {rate:?};\n\
-             /// Structure parameters.\n\
-             pub const STRUCTURE: ssvr_core::StructureParams = ssvr_core::StructureParams {{\n\
-             \x20   m1_kg: {m1:?},\n    m2_kg: {m2:?},\n    natural_frequency_hz: {f:?},\n\
-             \x20   damping_ratio: {xi:?},\n    friction_coefficient: {mu:?},\n    gravity_m_s2: {g:?},\n}};\n\
-             /// Displacement sensor noise RMS (m) the displacement detector is set for.\n\
-             pub const DISP_NOISE_RMS_M: f64 = {noise:?};\n\
-             /// Accelerometer noise RMS (m/s²) the slip-acceleration detector is set for.\n\
-             pub const ACCEL_NOISE_RMS_M_S2: f64 = {accel_noise:?};\n\
-             /// Static friction coefficient (the detector's breakaway shape).\n\
-             pub const STATIC_FRICTION_COEFFICIENT: f64 = {mu_s:?};\n\
-             /// Displacement full scale ± (m): a sample at or beyond it is saturated.\n\
-             pub const DISP_RANGE_M: f32 = f32::from_bits({range:#010x}); // {range_f:?}\n\
-             /// The model's detector settings (`{config}::for_noise` of the scene's sensors,\n\
-             /// `with_friction(STATIC_FRICTION_COEFFICIENT, mu)`).\n\
-             pub const DETECTOR: ssvr_core::{module}::{config} =\n\
-             \x20   ssvr_core::{module}::{debug};\n\
-             /// `DETECTOR` in its `Debug` form (reported in the `detector` message).\n\
-             pub const DETECTOR_DEBUG: &str = {debug:?};\n\
-             /// Ring buffer length of the detector (a power of two holding its fit windows).\n\
-             pub const DETECTOR_RING: usize = {ring};\n\
-             /// Whether the detector reads the slip acceleration (else the displacement).\n\
-             pub const DETECTOR_ON_ACCEL: bool = {on_accel};\n\
-             /// The detector type of this scene and model: it processes {input}.\n\
-             pub type Detector = ssvr_core::{module}::{ty}<DETECTOR_RING>;\n",
-            scene = self.path.display().to_string(),
-            rate = self.rate,
-            m1 = p.m1_kg,
-            m2 = p.m2_kg,
-            f = p.natural_frequency_hz,
-            xi = p.damping_ratio,
-            mu = p.friction_coefficient,
-            g = p.gravity_m_s2,
-            noise = self.disp_noise,
-            accel_noise = self.accel_noise,
-            on_accel = matches!(self.detector, DetectorChoice::Acceleration(_)),
-            mu_s = self.mu_static,
-            range = (self.disp_range as f32).to_bits(),
-            range_f = self.disp_range as f32,
-            ring = self.ring,
-        )
-    }
-
-    /// Consts of the estimator model: its name, the stick-slip settings and history.
-    fn model_consts(&self, model: &str) -> String {
-        use ssvr_core::stick_slip_estimator::{
-            history_for_age, StickSlipCoefficients, StickSlipEstimator,
-        };
-        let max_age = self.max_age;
-        let history = history_for_age(max_age);
-        let structure = ssvr_core::Structure::new(self.params)
-            .unwrap_or_else(|e| panic!("scene {}: {e:?}", self.path.display()));
-        // The stick-slip estimator's coefficients, computed here with ssvr-core in f64 and rounded
-        // to f32 exactly as `StickSlipEstimator::new` does on the host: the image restores them
-        // from their bits and needs no f64 start-up code.
-        let coefficients =
-            StickSlipCoefficients::<f32>::new(&structure, self.rate).unwrap_or_else(|e| {
-                panic!(
-                    "scene {}: the stick-slip estimator rejects rate_hz = {}: {e:?}",
-                    self.path.display(),
-                    self.rate
-                )
-            });
-        if model != "rectangular" {
-            // host-sim's mirror (`qemu_cmd::HOST_HISTORY_CAPACITY`) holds up to 2048 samples.
-            type Check = StickSlipEstimator<f32, ssvr_core::math::F32Poly, 2048>;
-            assert!(
-                history <= 2048,
-                "scene {}: the stick-slip history of {history} samples (the detector's longest \
-                 back-dating at {} Hz) is too long for the firmware",
-                self.path.display(),
-                self.rate
-            );
-            if let Err(e) =
-                Check::from_coefficients(coefficients, STICK_SLIP.for_rate(self.rate), history)
-            {
-                panic!(
-                    "scene {}: the stick-slip estimator rejects the scene: {e:?}",
-                    self.path.display()
-                );
-            }
+    fn specimen(&self) -> Specimen {
+        Specimen {
+            structure: self.params,
+            static_friction_coefficient: self.mu_static,
+            sample_rate_hz: self.rate,
+            disp_noise_rms_m: self.disp_noise,
+            accel_noise_rms_m_s2: self.accel_noise,
+            disp_range_m: self.disp_range,
         }
-        let mut words = String::new();
-        for w in coefficients.to_bits() {
-            let _ = write!(words, "{w:#010x}, ");
-        }
-        let n = StickSlipCoefficients::<f32>::BITS;
-        let cfg = if model == "fixed-base" {
-            FIXED_BASE
-        } else {
-            STICK_SLIP
-        }
-        .for_rate(self.rate);
-        let debug = format!("{cfg:?}");
-        format!(
-            "/// The estimator model (`SSVR_MODEL`).\n\
-             pub const MODEL: &str = {model:?};\n\
-             /// The stick-slip estimator's settings (stick-slip model; fixed-base: no identification).\n\
-             pub const STICK_SLIP: ssvr_core::stick_slip_estimator::StickSlipConfig =\n\
-             \x20   ssvr_core::stick_slip_estimator::{debug};\n\
-             /// `STICK_SLIP` in its `Debug` form (reported in the `model` message).\n\
-             pub const STICK_SLIP_DEBUG: &str = {debug:?};\n\
-             /// The detector's longest back-dating (samples).\n\
-             pub const MAX_EVENT_AGE_SAMPLES: usize = {max_age};\n\
-             /// History of the stick-slip estimator (samples): `MAX_EVENT_AGE_SAMPLES + 2`.\n\
-             pub const HISTORY: usize = {history};\n\
-             /// The stick-slip estimator's coefficients (`StickSlipCoefficients::<f32>::to_bits`).\n\
-             pub const STICK_SLIP_COEFFICIENTS: [u32; {n}] = [{words}];\n"
-        )
     }
 
     /// Board-only consts: integer sample rate, ADC configuration, sensor scaling.

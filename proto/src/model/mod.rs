@@ -13,7 +13,7 @@ mod rectangular;
 mod stick_slip;
 
 pub use rectangular::RectangularModel;
-pub use stick_slip::StickSlipModel;
+pub use stick_slip::{StickSlipF32, StickSlipModel};
 
 use crate::event::Event;
 use crate::frame::Frame;

@@ -17,13 +17,13 @@ use ssvr_core::math::F32Poly;
 use ssvr_core::stick_slip_estimator::{MuEstimate, StickSlipCoefficients, StickSlipEstimator};
 use ssvr_core::Error;
 
-/// The stick-slip estimator with storage for `H` samples of history.
-pub type Estimator<const H: usize> = StickSlipEstimator<f32, F32Poly, H>;
+/// The stick-slip estimator in f32 with storage for `H` samples of history.
+pub type StickSlipF32<const H: usize> = StickSlipEstimator<f32, F32Poly, H>;
 
 /// The stick-slip model (events on) or the fixed-base model (events off).
 #[derive(Debug, Clone)]
 pub struct StickSlipModel<const H: usize> {
-    est: Estimator<H>,
+    est: StickSlipF32<H>,
     events: bool,
     max_age: f32,
     table: [f32; BATCH],
@@ -46,7 +46,7 @@ fn inputs(f: &Frame) -> (f32, f32) {
 impl<const H: usize> StickSlipModel<H> {
     /// The model on an estimator: `events` false is the fixed-base model; events older than
     /// `max_age` samples are pushed with that age.
-    pub fn new(est: Estimator<H>, events: bool, max_age: f32) -> Self {
+    pub fn new(est: StickSlipF32<H>, events: bool, max_age: f32) -> Self {
         Self {
             est,
             events,
@@ -58,7 +58,7 @@ impl<const H: usize> StickSlipModel<H> {
     }
 
     /// The estimator.
-    pub fn estimator(&self) -> &Estimator<H> {
+    pub fn estimator(&self) -> &StickSlipF32<H> {
         &self.est
     }
 }
@@ -69,7 +69,7 @@ impl<const H: usize> FromPlan for StickSlipModel<H> {
     /// settings and history.
     fn from_plan(plan: &Plan) -> Result<Self, PlanError> {
         let c = StickSlipCoefficients::from_bits(&plan.coefficients).ok_or(PlanError::Words)?;
-        let est = Estimator::<H>::from_coefficients(c, plan.stick_slip, plan.history)
+        let est = StickSlipF32::<H>::from_coefficients(c, plan.stick_slip, plan.history)
             .map_err(PlanError::Core)?;
         Ok(Self::new(
             est,

@@ -7,10 +7,13 @@
 //! takes the difference, which cancels the fixed overhead. On the board the same code counts
 //! core clock cycles (the calibration then reports cycles per instruction of that loop).
 //!
-//! Messages (parsed by host-sim's `qemu_runner`):
+//! The model and the detector are those of the compiled-in plan ([`crate::plan`]); what is
+//! measured of each is chosen by their types ([`BenchModel`], `EventDetector::INPUT`).
+//!
+//! Messages (decoded by host-sim by their typed fields):
 //! * `icount calibration instructions=.. ticks=..`
 //! * `icount raw updates=.. update_ticks=.. loop_ticks=.. reversals=.. reversal_ticks=.. reversal_errors=..`:
-//!   the compiled-in model's estimator ([`super::model`]): steady-state samples (rectangular and
+//!   the compiled-in model's estimator ([`BenchModel`]): steady-state samples (rectangular and
 //!   stick-slip: sliding, the stick-slip model identifying μ on every block of samples; fixed-base:
 //!   stuck)
 //!   and samples with an event of age 0.5 (fixed-base: none, `reversals=0`);
@@ -40,21 +43,25 @@
 //!   alone (filling the batches);
 //! * `icount result instructions_per_tick=.. instructions_per_sample=.. instructions_per_reversal=..`
 
-use super::model::Estimator;
-use super::pipeline::{EventSource, FrameOut, Pipeline, Sample, BATCH};
-use super::scene::Detector;
+use crate::plan::{Detector, Model};
 use core::hint::black_box;
 use core::sync::atomic::{compiler_fence, Ordering};
 use cortex_m::peripheral::syst::SystClkSource;
 use cortex_m::peripheral::SYST;
+use ssvr_core::duhamel_recursion::Estimator32;
+use ssvr_core::reversal_detector::SlipEvent;
+use ssvr_core::stick_slip_estimator::{StickSlipCoefficients, StickSlipConfig};
+use ssvr_proto::model::StickSlipF32 as StickSlipEstimator;
+use ssvr_proto::{
+    DetectorInput, DetectorPlan, EventDetector, EventSource, Frame, Pipeline, Plan,
+    RectangularModel, Sample, StickSlipModel, BATCH,
+};
 
 /// Steady-state updates timed in one block.
 pub const UPDATES: u32 = 10_000;
 /// Samples with a reversal timed in one block (rectangular and stick-slip models).
-#[cfg_attr(ssvr_model = "fixed_base", allow(dead_code))]
 pub const REVERSALS: u32 = 1_000;
 /// Samples with an event at the largest age timed (stick-slip model).
-#[cfg(ssvr_model = "stick_slip")]
 pub const LONG_EVENTS: u32 = 100;
 /// Samples of the detector and pipeline blocks.
 pub const DETECTOR_SAMPLES: u32 = 10_000;
@@ -143,8 +150,7 @@ pub fn calibrate(t: &mut Ticks) -> (u32, u32) {
 /// zero, the friction flips); steady sliding when `half` exceeds the run.
 #[inline(always)]
 fn detector_signal(i: u32, half: u32) -> f32 {
-    #[cfg(ssvr_model = "stick_slip")]
-    {
+    if Detector::INPUT == DetectorInput::SlipAcceleration {
         let period = half + half / 2;
         let (q, m) = (i / period, i % period);
         let d = if q % 2 == 0 { 1.0 } else { -1.0 };
@@ -153,9 +159,7 @@ fn detector_signal(i: u32, half: u32) -> f32 {
         } else {
             -2.0 * d
         }
-    }
-    #[cfg(not(ssvr_model = "stick_slip"))]
-    {
+    } else {
         triangle(i, half)
     }
 }
@@ -166,8 +170,7 @@ fn detector_signal(i: u32, half: u32) -> f32 {
 /// and a stick. `rise` = `period`: no event (a ramp; the phase detector stays stuck).
 #[inline(always)]
 fn stair_signal(i: u32, period: u32, rise: u32) -> f32 {
-    #[cfg(ssvr_model = "stick_slip")]
-    {
+    if Detector::INPUT == DetectorInput::SlipAcceleration {
         let m = i % period;
         if m < rise {
             0.0
@@ -178,9 +181,7 @@ fn stair_signal(i: u32, period: u32, rise: u32) -> f32 {
         } else {
             0.0
         }
-    }
-    #[cfg(not(ssvr_model = "stick_slip"))]
-    {
+    } else {
         staircase(i, period, rise)
     }
 }
@@ -196,7 +197,6 @@ fn triangle(i: u32, half: u32) -> f32 {
 
 /// A staircase: rising at [`SLOPE_M`] per sample for `rise` samples of every `period`, flat for
 /// the rest (a ramp when `rise` = `period`): the same instructions whatever `rise` is.
-#[cfg_attr(ssvr_model = "stick_slip", allow(dead_code))]
 #[inline(always)]
 fn staircase(i: u32, period: u32, rise: u32) -> f32 {
     let (q, m) = (i / period, i % period);
@@ -205,19 +205,18 @@ fn staircase(i: u32, period: u32, rise: u32) -> f32 {
 
 /// Time the detector on a staircase (a stick and a slip start per step) against the same
 /// generator as a ramp; emit `icount detector_stick ..`.
-fn run_detector_sticks(t: &mut Ticks, det: &Detector) {
-    #[cfg(not(ssvr_model = "stick_slip"))]
-    let (rise, period) = {
-        let cfg = super::scene::DETECTOR;
-        let rise = black_box(2 * cfg.fit_half as u32 + 10);
-        (
-            rise,
-            black_box(rise + cfg.stick_samples as u32 + 2 * cfg.fit_half as u32 + 10),
-        )
+fn run_detector_sticks(t: &mut Ticks, plan: &Plan, det: &Detector) {
+    let (rise, period) = match plan.detector {
+        DetectorPlan::Displacement(cfg) => {
+            let rise = black_box(2 * cfg.fit_half as u32 + 10);
+            (
+                rise,
+                black_box(rise + cfg.stick_samples as u32 + 2 * cfg.fit_half as u32 + 10),
+            )
+        }
+        // Stuck 60 samples (longer than the slip start's search window), 40 sliding.
+        DetectorPlan::SlipAcceleration(_) => (black_box(60u32), black_box(100u32)),
     };
-    // Stuck 60 samples (longer than the slip start's search window), 40 sliding.
-    #[cfg(ssvr_model = "stick_slip")]
-    let (rise, period) = (black_box(60u32), black_box(100u32));
     let timed = |rise: u32, t: &mut Ticks| {
         let mut d = det.clone();
         for i in 0..rise {
@@ -227,8 +226,8 @@ fn run_detector_sticks(t: &mut Ticks, det: &Detector) {
         let ticks = t.time(|| {
             for i in rise..rise + STAIR_SAMPLES {
                 match black_box(&mut d).process(stair_signal(i, period, rise)) {
-                    Some(ssvr_core::reversal_detector::SlipEvent::Stick { .. }) => sticks += 1,
-                    Some(ssvr_core::reversal_detector::SlipEvent::SlipStart { .. }) => starts += 1,
+                    Some(SlipEvent::Stick { .. }) => sticks += 1,
+                    Some(SlipEvent::SlipStart { .. }) => starts += 1,
                     _ => {}
                 }
             }
@@ -250,7 +249,7 @@ fn run_detector_sticks(t: &mut Ticks, det: &Detector) {
 /// Time the detector on a ramp, a triangle and a staircase and the whole pipeline step on a
 /// ramp; emit the raw ticks (`icount detector ..`, `icount detector_stick ..`,
 /// `icount pipeline ..`).
-fn run_detector(t: &mut Ticks, est: &Estimator, det: &Detector) {
+fn run_detector(t: &mut Ticks, plan: &Plan, model: &Model, det: &Detector) {
     const WARMUP: u32 = 50;
     let ramp = black_box(u32::MAX / 4);
     let tri = black_box(TRIANGLE_HALF);
@@ -287,7 +286,7 @@ fn run_detector(t: &mut Ticks, est: &Estimator, det: &Detector) {
         triangle_ticks,
         reversals
     );
-    run_detector_sticks(t, det);
+    run_detector_sticks(t, plan, det);
 
     // The ramp at half the slope from −25 mm: it stays inside the displacement range (±50 mm
     // by default) over the whole block, so the detector slides throughout (beyond the range the
@@ -299,9 +298,14 @@ fn run_detector(t: &mut Ticks, est: &Estimator, det: &Detector) {
     };
     // In batches of BATCH, as the images run it: the loop alone fills the batch and touches the
     // frames.
-    let mut pipe = Pipeline::new(est.clone(), det.clone(), EventSource::Detector);
+    let mut pipe = Pipeline::new(
+        model.clone(),
+        det.clone(),
+        EventSource::Detector,
+        plan.disp_range_m(),
+    );
     let mut batch = [Sample::missing(0); BATCH];
-    let mut frames = [FrameOut::EMPTY; BATCH];
+    let mut frames = [Frame::EMPTY; BATCH];
     let fill = |batch: &mut [Sample; BATCH], from: u32| {
         for (b, i) in batch.iter_mut().zip(from..) {
             *b = sample(i);
@@ -337,11 +341,11 @@ fn run_detector(t: &mut Ticks, est: &Estimator, det: &Detector) {
 
 /// Time [`UPDATES`] steady-state updates of the compiled-in model and [`REVERSALS`] samples that
 /// each push an event (alternating ±1, age 0.5 samples) before their update; emit raw ticks and
-/// the derived instruction counts; then the detector and the pipeline ([`run_detector`]). `est`
-/// and `det` should be freshly built.
-pub fn run(t: &mut Ticks, est: Estimator, det: Detector) {
+/// the derived instruction counts; then the detector and the pipeline ([`run_detector`]).
+/// `model` and `det` should be freshly built from `plan`.
+pub fn run(t: &mut Ticks, plan: &Plan, model: Model, det: Detector) {
     let (cal_instr, cal_ticks) = calibrate(t);
-    run_detector(t, &est, &det);
+    run_detector(t, plan, &model, &det);
     let ipt = if cal_ticks == 0 {
         0.0
     } else {
@@ -352,7 +356,7 @@ pub fn run(t: &mut Ticks, est: Estimator, det: Detector) {
             black_box(i);
         }
     });
-    let (update_ticks, reversals, reversal_ticks, errors) = estimator_blocks(t, est);
+    let (update_ticks, reversals, reversal_ticks, errors) = model.estimator_blocks(t, plan);
     defmt::info!(
         "icount raw updates={=u32} update_ticks={=u32} loop_ticks={=u32} reversals={=u32} reversal_ticks={=u32} reversal_errors={=u32}",
         UPDATES,
@@ -379,9 +383,34 @@ pub fn run(t: &mut Ticks, est: Estimator, det: Detector) {
     );
 }
 
+/// What the benchmark measures of a model's estimator: (steady-state update ticks, events
+/// pushed, the ticks of their samples, rejected events), emitting the model's own messages.
+pub trait BenchModel: Clone {
+    /// Time the model's estimator.
+    fn estimator_blocks(&self, t: &mut Ticks, plan: &Plan) -> (u32, u32, u32, u32);
+}
+
+impl BenchModel for RectangularModel {
+    /// Steady sliding updates and samples with a reversal (±1 alternating, age 0.5).
+    fn estimator_blocks(&self, t: &mut Ticks, _plan: &Plan) -> (u32, u32, u32, u32) {
+        rectangular_blocks(t, self.estimator().clone())
+    }
+}
+
+impl<const H: usize> BenchModel for StickSlipModel<H> {
+    /// The stick-slip model (events on) or the fixed-base model (events off).
+    fn estimator_blocks(&self, t: &mut Ticks, plan: &Plan) -> (u32, u32, u32, u32) {
+        let est = self.estimator().clone();
+        if plan.model == ssvr_proto::ModelKind::StickSlip {
+            stick_slip_blocks(t, plan, est)
+        } else {
+            fixed_base_blocks(t, plan, est)
+        }
+    }
+}
+
 /// The rectangular model: (steady-state update ticks, reversals, their ticks, rejected).
-#[cfg(ssvr_model = "rectangular")]
-fn estimator_blocks(t: &mut Ticks, mut est: Estimator) -> (u32, u32, u32, u32) {
+fn rectangular_blocks(t: &mut Ticks, mut est: Estimator32) -> (u32, u32, u32, u32) {
     // Enter the sliding state and let the response settle into its steady recursion.
     let mut errors: u32 = 0;
     if est.push_reversal(1.0, 0.0).is_err() {
@@ -410,17 +439,15 @@ fn estimator_blocks(t: &mut Ticks, mut est: Estimator) -> (u32, u32, u32, u32) {
 }
 
 /// Inputs of the stick-slip benchmark: a table and a top acceleration (m/s²).
-#[cfg(not(ssvr_model = "rectangular"))]
 fn inputs() -> (f32, f32) {
     (black_box(0.75), black_box(-1.25))
 }
 
 /// Steady-state stuck updates of a fresh stick-slip estimator: its ticks (`icount stick_slip`).
-#[cfg(not(ssvr_model = "rectangular"))]
-fn stuck_block(t: &mut Ticks, est: &Estimator) -> u32 {
+fn stuck_block<const H: usize>(t: &mut Ticks, plan: &Plan, est: &StickSlipEstimator<H>) -> u32 {
     let mut e = est.clone();
     let (u, y) = inputs();
-    for _ in 0..1000 + super::scene::HISTORY {
+    for _ in 0..1000 + plan.history {
         black_box(e.update(u, y));
     }
     t.time(|| {
@@ -430,12 +457,10 @@ fn stuck_block(t: &mut Ticks, est: &Estimator) -> u32 {
     })
 }
 
-/// Steady-state samples of the estimator in blocks of [`super::pipeline::BATCH`]
-/// (`update_block`, as the pipeline runs it): stuck, and sliding with μ identified (stick-slip
-/// model; fixed-base: 0). Emits `icount block batch=.. updates=.. loop_ticks=.. stuck_ticks=..
-/// slide_ticks=..`.
-#[cfg(not(ssvr_model = "rectangular"))]
-fn block_runs(t: &mut Ticks, est: &Estimator) {
+/// Steady-state samples of the estimator in blocks of [`BATCH`] (`update_block`, as the
+/// pipeline runs it): stuck, and sliding with μ identified (stick-slip model; fixed-base: 0).
+/// Emits `icount block batch=.. updates=.. loop_ticks=.. stuck_ticks=.. slide_ticks=..`.
+fn block_runs<const H: usize>(t: &mut Ticks, plan: &Plan, est: &StickSlipEstimator<H>) {
     let blocks = UPDATES / BATCH as u32;
     let (u, y) = inputs();
     let (table, top) = ([u; BATCH], [y; BATCH]);
@@ -447,9 +472,10 @@ fn block_runs(t: &mut Ticks, est: &Estimator) {
         }
     });
     // Warm up (past the history and the first identification blocks), then time.
-    let time_blocks = |t: &mut Ticks, e: &mut Estimator, out: &mut [f32; BATCH]| {
+    let warmup = (1000 + plan.history) / BATCH + 1;
+    let time_blocks = |t: &mut Ticks, e: &mut StickSlipEstimator<H>, out: &mut [f32; BATCH]| {
         let mut errors = 0u32;
-        for _ in 0..(1000 + super::scene::HISTORY) / BATCH + 1 {
+        for _ in 0..warmup {
             errors += u32::from(e.update_block(&table, &top, out).is_err());
         }
         let ticks = t.time(|| {
@@ -466,7 +492,7 @@ fn block_runs(t: &mut Ticks, est: &Estimator) {
     };
     let mut stuck = est.clone();
     let (stuck_ticks, mut errors) = time_blocks(t, &mut stuck, &mut out);
-    let slide_ticks = if cfg!(ssvr_model = "stick_slip") {
+    let slide_ticks = if plan.model == ssvr_proto::ModelKind::StickSlip {
         let mut slide = est.clone();
         errors += u32::from(slide.push_event(1, 0.0).is_err());
         let (ticks, e) = time_blocks(t, &mut slide, &mut out);
@@ -489,18 +515,21 @@ fn block_runs(t: &mut Ticks, est: &Estimator) {
 /// The stick-slip model: steady sliding samples (μ identified on every block: the history is full
 /// and the delayed samples slide), events at age 0.5, events at the largest age; and the stuck
 /// samples (`icount stick_slip`).
-#[cfg(ssvr_model = "stick_slip")]
-fn estimator_blocks(t: &mut Ticks, est: Estimator) -> (u32, u32, u32, u32) {
-    use super::model::MAX_AGE;
-    block_runs(t, &est);
-    let stuck_ticks = stuck_block(t, &est);
+fn stick_slip_blocks<const H: usize>(
+    t: &mut Ticks,
+    plan: &Plan,
+    est: StickSlipEstimator<H>,
+) -> (u32, u32, u32, u32) {
+    let max_age = plan.max_age as f32;
+    block_runs(t, plan, &est);
+    let stuck_ticks = stuck_block(t, plan, &est);
     let mut est = est;
     let (u, y) = inputs();
     let mut errors: u32 = 0;
     if est.push_event(1, 0.0).is_err() {
         errors += 1;
     }
-    for _ in 0..1000 + super::scene::HISTORY {
+    for _ in 0..1000 + plan.history {
         black_box(est.update(u, y));
     }
     let update_ticks = t.time(|| {
@@ -520,18 +549,17 @@ fn estimator_blocks(t: &mut Ticks, est: Estimator) -> (u32, u32, u32, u32) {
         }
     });
     // The prediction alone: the same estimator without the identification.
-    let mut bare =
-        match super::model::with_config(ssvr_core::stick_slip_estimator::StickSlipConfig {
-            identify_mu: false,
-            ..super::scene::STICK_SLIP
-        }) {
-            Ok(e) => e,
-            Err(_) => est.clone(),
-        };
+    let bare_config = StickSlipConfig {
+        identify_mu: false,
+        ..plan.stick_slip
+    };
+    let mut bare = StickSlipCoefficients::from_bits(&plan.coefficients)
+        .and_then(|c| StickSlipEstimator::<H>::from_coefficients(c, bare_config, plan.history).ok())
+        .unwrap_or_else(|| est.clone());
     if bare.push_event(1, 0.0).is_err() {
         errors += 1;
     }
-    for _ in 0..1000 + super::scene::HISTORY {
+    for _ in 0..1000 + plan.history {
         black_box(bare.update(u, y));
     }
     let predict_ticks = t.time(|| {
@@ -539,7 +567,7 @@ fn estimator_blocks(t: &mut Ticks, est: Estimator) -> (u32, u32, u32, u32) {
             black_box(black_box(&mut bare).update(u, y));
         }
     });
-    let age = black_box(MAX_AGE);
+    let age = black_box(max_age);
     let long_event_ticks = t.time(|| {
         for _ in 0..LONG_EVENTS {
             let e = black_box(&mut est);
@@ -556,7 +584,7 @@ fn estimator_blocks(t: &mut Ticks, est: Estimator) -> (u32, u32, u32, u32) {
         stuck_ticks,
         LONG_EVENTS,
         long_event_ticks,
-        MAX_AGE,
+        max_age,
         UPDATES,
         predict_ticks
     );
@@ -564,10 +592,13 @@ fn estimator_blocks(t: &mut Ticks, est: Estimator) -> (u32, u32, u32, u32) {
 }
 
 /// The fixed-base model: steady stuck samples (no event is ever pushed).
-#[cfg(ssvr_model = "fixed_base")]
-fn estimator_blocks(t: &mut Ticks, est: Estimator) -> (u32, u32, u32, u32) {
-    block_runs(t, &est);
-    let stuck_ticks = stuck_block(t, &est);
+fn fixed_base_blocks<const H: usize>(
+    t: &mut Ticks,
+    plan: &Plan,
+    est: StickSlipEstimator<H>,
+) -> (u32, u32, u32, u32) {
+    block_runs(t, plan, &est);
+    let stuck_ticks = stuck_block(t, plan, &est);
     defmt::info!(
         "icount stick_slip stuck_updates={=u32} stuck_ticks={=u32} long_events={=u32} long_event_ticks={=u32} max_age={=f32} predict_updates={=u32} predict_ticks={=u32}",
         UPDATES,
