@@ -117,10 +117,9 @@ fn plan_consts(path: &Path, plan: &Plan) -> String {
         let _ = write!(words, " {w:#010x},");
     }
     let model = match plan.model {
-        ModelKind::Rectangular => "ssvr_proto::RectangularModel".to_string(),
-        ModelKind::StickSlip | ModelKind::FixedBase => {
-            "ssvr_proto::StickSlipModel<STORAGE>".to_string()
-        }
+        ModelKind::Rectangular => "ssvr_proto::RectangularModel",
+        ModelKind::StickSlip => "ssvr_proto::StickSlipModel<STORAGE>",
+        ModelKind::FixedBase => "ssvr_proto::FixedBaseModel<STORAGE>",
     };
     let detector = match plan.detector {
         DetectorPlan::Displacement(_) => "ssvr_proto::DisplacementDetector<RING>",

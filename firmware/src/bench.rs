@@ -397,7 +397,7 @@ impl BenchModel for RectangularModel {
     }
 }
 
-impl<const H: usize> BenchModel for StickSlipModel<H> {
+impl<const H: usize, const EVENTS: bool> BenchModel for StickSlipModel<H, EVENTS> {
     /// The stick-slip model (events on) or the fixed-base model (events off).
     fn estimator_blocks(&self, t: &mut Ticks, plan: &Plan) -> (u32, u32, u32, u32) {
         let est = self.estimator().clone();

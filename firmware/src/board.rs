@@ -111,20 +111,10 @@ pub fn run() -> ! {
         halt()
     };
     let painted = stack::paint();
-    let plan = match plan::restore() {
-        Ok(p) => p,
-        Err(e) => {
-            defmt::error!("the compiled-in plan is invalid: {}", e);
-            halt()
-        }
-    };
-    defmt::info!(
-        "ssvr board image: scene {=str}, {=u32} Hz, model {=str}",
-        plan::generated::SCENE_PATH,
-        scene_board::TIMER_RATE_HZ,
-        plan.model.name()
-    );
-    ssvr_proto::stream::emit_plan(&plan);
+    let plan = plan::PLAN;
+    // `plan digest=.. model=.. rate_hz=.. ..`: the host (`host-sim monitor`, or by hand with
+    // `host-sim`'s plan of the scene) checks the image runs the plan it expects.
+    plan::emit();
 
     // 8 MHz HSE from the ST-LINK MCO (bypass), 180 MHz core.
     let mut rcc = dp.RCC.freeze(
@@ -173,12 +163,10 @@ pub fn run() -> ! {
     };
     let (producer, mut consumer) = queue.split();
     // In static RAM (counted in the image's RAM figure), owned by the main loop.
-    let pipe = match plan::pipeline(&plan, EventSource::Detector) {
-        Ok(p) => p,
-        Err(e) => {
-            defmt::error!("the compiled-in plan cannot run: {}", e);
-            halt()
-        }
+    // Not reachable (build.rs made the plan with the same code); no detail, to save flash.
+    let Ok(pipe) = plan::pipeline(&plan, EventSource::Detector) else {
+        defmt::error!("the compiled-in plan cannot run");
+        halt()
     };
     let Some(pipeline) = cortex_m::singleton!(: plan::ImagePipeline = pipe) else {
         halt()

@@ -2,7 +2,7 @@
 //! (`SSVR_MODEL`) with `ssvr-scene` and `ssvr_proto::Plan::new`, the same code as the host, and
 //! writes its words ([`generated::PLAN_WORDS`]), its digest, and the model's and detector's types
 //! ([`Model`], [`Detector`]: only that model's code is in the image). [`pipeline`] restores the
-//! plan and builds the pipeline from it; the image reports the plan's digest
+//! plan (at compile time: [`PLAN`]) and builds the pipeline from it; the image reports the plan's digest
 //! (`ssvr_proto::stream::emit_plan`) so the host can check it runs the plan it expects.
 
 use ssvr_proto::{EventDetector, EventSource, FromPlan, Pipeline, Plan, PlanError};
@@ -17,48 +17,51 @@ pub use generated::{Detector, Model};
 /// The pipeline of the compiled-in model and detector.
 pub type ImagePipeline = Pipeline<Model, Detector>;
 
+/// The compiled-in plan, restored from its words at compile time (a malformed word list or a
+/// digest that does not match fails the build, not the image).
+#[allow(clippy::panic)] // evaluated at compile time
+pub const PLAN: Plan = match Plan::from_words(&generated::PLAN_WORDS) {
+    Ok(p) => p,
+    Err(_) => panic!("the plan's words do not restore a plan: rebuild"),
+};
+const _: () = assert!(
+    PLAN.digest() == generated::PLAN_DIGEST,
+    "the restored plan's digest differs from build.rs's"
+);
+
 /// Why the compiled-in plan cannot run (build.rs validated it: not expected).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum PlanFault {
-    /// The words do not restore a plan, or the library rejects a setting.
-    Plan(PlanError),
-    /// The restored plan's digest differs from the one build.rs computed.
-    Digest,
-}
+pub struct PlanFault(pub PlanError);
 
 impl defmt::Format for PlanFault {
     fn format(&self, f: defmt::Formatter<'_>) {
-        match self {
-            PlanFault::Plan(PlanError::Core(e)) => {
-                defmt::write!(f, "invalid {=str}", e.param().name())
+        // Not reachable: build.rs made the plan with the same code. Kept short (no parameter
+        // names): the board image has little flash to spare.
+        match self.0 {
+            PlanError::Core(_) => defmt::write!(f, "a setting is rejected"),
+            PlanError::History(h) => {
+                defmt::write!(f, "history of {=u32} samples too long", h as u32)
             }
-            PlanFault::Plan(PlanError::History(h)) => {
-                defmt::write!(f, "history of {=u32} samples too long", *h as u32)
-            }
-            PlanFault::Plan(PlanError::Words) => defmt::write!(f, "malformed plan words"),
-            PlanFault::Plan(PlanError::Detector) => defmt::write!(f, "detector/plan mismatch"),
-            PlanFault::Digest => defmt::write!(f, "plan digest mismatch"),
+            PlanError::Words => defmt::write!(f, "malformed plan words"),
+            PlanError::Detector => defmt::write!(f, "detector/plan mismatch"),
+            PlanError::Model => defmt::write!(f, "model/plan mismatch"),
         }
     }
 }
 
-/// The compiled-in plan, restored from its words and checked against its digest.
-pub fn restore() -> Result<Plan, PlanFault> {
-    let plan = Plan::from_words(&generated::PLAN_WORDS).map_err(PlanFault::Plan)?;
-    if plan.digest() != generated::PLAN_DIGEST {
-        return Err(PlanFault::Digest);
-    }
-    Ok(plan)
+/// Stream the plan the image runs (`plan digest=.. model=.. ..`).
+pub fn emit() {
+    ssvr_proto::stream::emit_plan(&PLAN, generated::PLAN_DIGEST);
 }
 
 /// The model of the plan, at rest.
 pub fn model(plan: &Plan) -> Result<Model, PlanFault> {
-    Model::from_plan(plan).map_err(PlanFault::Plan)
+    Model::from_plan(plan).map_err(PlanFault)
 }
 
 /// The detector of the plan, at rest.
 pub fn detector(plan: &Plan) -> Result<Detector, PlanFault> {
-    <Detector as EventDetector>::from_plan(plan).map_err(PlanFault::Plan)
+    <Detector as EventDetector>::from_plan(plan).map_err(PlanFault)
 }
 
 /// The pipeline of the plan at sample 0, its events from `source`.

@@ -155,7 +155,7 @@ pub struct BenchScene {
 
 /// Cortex-M4F instructions per steady-state sample of the firmware's f32 recursion
 /// (`Estimator32::update()`, the rectangular model), measured under QEMU
-/// ([`crate::qemu_cmd::measure_instruction_counts`]: the QEMU image built for the rectangular
+/// ([`crate::qemu::measure_instruction_counts`]: the QEMU image built for the rectangular
 /// model, SysTick with `-icount shift=0`). The count does not depend on the scene (the firmware
 /// times the recursion on its own input), so it is measured once per process and cached. `None`
 /// when QEMU is not installed or the image cannot be built or run.
@@ -163,10 +163,10 @@ pub fn m4f_instructions_per_sample(scene: &BenchScene) -> Option<f64> {
     static COUNT: std::sync::OnceLock<Option<f64>> = std::sync::OnceLock::new();
     let _ = scene;
     *COUNT.get_or_init(|| {
-        if !crate::qemu_runner::qemu_available() {
+        if !crate::qemu::image::qemu_available() {
             return None;
         }
-        crate::qemu_cmd::measure_instruction_counts(crate::model::Model::Rectangular)
+        crate::qemu::measure_instruction_counts(crate::model::Model::Rectangular)
             .map(|ic| ic.instructions_per_sample)
             .map_err(|e| eprintln!("bench: no M4F instruction count: {e:#}"))
             .ok()

@@ -86,7 +86,7 @@ enum Command {
         /// The estimator model built into the firmware (default: the smallest that serves the
         /// scene, chosen from the simulated run like `run`: fixed-base, rectangular or
         /// stick-slip).
-        #[arg(long, value_enum)]
+        #[arg(long)]
         model: Option<host_sim::model::Model>,
         /// Print one JSON object.
         #[arg(long)]
@@ -143,7 +143,7 @@ struct RunArgs {
     on_stick: StickPolicy,
     /// The estimator model (default: the smallest that serves the scene, chosen from the
     /// simulated run: fixed-base, rectangular or stick-slip).
-    #[arg(long, value_enum)]
+    #[arg(long)]
     model: Option<host_sim::model::Model>,
     /// Half-width of the window matching detected to true events (ms).
     #[arg(long, value_name = "MS", default_value_t = 1e3 * host_sim::run::DEFAULT_MATCH_TOLERANCE_S)]
@@ -243,7 +243,7 @@ fn run(cli: Cli) -> Result<()> {
             }
         }
         Some(Command::Qemu { scene, model, json }) => {
-            host_sim::qemu_cmd::command(scene.as_deref(), json, model)
+            host_sim::qemu::command(scene.as_deref(), json, model)
         }
         Some(Command::Bench { quick, json, out }) => {
             let report = host_sim::bench::run(&host_sim::bench::BenchOptions {

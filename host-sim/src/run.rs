@@ -36,14 +36,15 @@
 //! Reversals scenes (a prescribed friction train, no table motion) have no physical truth to
 //! simulate and are rejected with an error.
 
-use crate::model::{self, Model, ModelEstimator};
+use crate::model::{self, Model};
+use crate::pipeline::{self, sample_of};
 use crate::scene::{Input, Scene};
 use crate::sensors::SensorModel;
 use crate::truth::{simulate, EventKind, Phase, TruthInput};
 use anyhow::{anyhow, bail, Context, Result};
 use serde::Serialize;
 use ssvr_core::duhamel_recursion::Estimator32;
-use ssvr_core::reversal_detector::SlipEvent;
+use ssvr_proto::{flags, DetectorPlan, Event, EventKind as FrameEventKind, Plan};
 use std::fmt;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -287,7 +288,7 @@ pub struct RunReport {
 #[derive(Debug, Clone, Serialize)]
 pub struct DetectorReport {
     /// Which detector the model uses: `slip-displacement` or `slip-acceleration`.
-    pub kind: model::DetectorKind,
+    pub kind: &'static str,
     /// Ring length N.
     pub ring: usize,
     /// The longest back-dating of its events (samples).
@@ -305,28 +306,26 @@ pub struct DetectorReport {
 }
 
 impl DetectorReport {
-    fn of(d: &model::Detector) -> Self {
+    fn of(plan: &Plan) -> Self {
         let mut r = Self {
-            kind: d.kind(),
-            ring: 0,
-            max_age_samples: d.max_age_samples(),
+            kind: "",
+            ring: plan.ring,
+            max_age_samples: plan.max_age,
             hysteresis_m: None,
             fit_half: None,
             stick_samples: None,
             threshold_m_s2: None,
             stall_samples: None,
         };
-        match d {
-            model::Detector::Displacement(x) => {
-                let c = x.config();
-                r.ring = model::DISPLACEMENT_DETECTOR_RING;
+        match plan.detector {
+            DetectorPlan::Displacement(c) => {
+                r.kind = "slip-displacement";
                 r.hysteresis_m = Some(c.hysteresis_m as f64);
                 r.fit_half = Some(c.fit_half);
                 r.stick_samples = Some(c.stick_samples);
             }
-            model::Detector::Acceleration(x) => {
-                let c = x.config();
-                r.ring = model::PHASE_DETECTOR_RING;
+            DetectorPlan::SlipAcceleration(c) => {
+                r.kind = "slip-acceleration";
                 r.threshold_m_s2 = Some(c.threshold_m_s2 as f64);
                 r.stall_samples = Some(c.stall_samples);
             }
@@ -579,17 +578,15 @@ pub fn run<W: Write>(
         Some(m) => (m, "chosen with --model".to_string()),
         None => model::choose(&truth, scene.duration_s),
     };
-    let mut detector = model::Detector::for_model(
-        model,
-        &scene.sensors,
-        rate,
-        (scene.static_friction_coefficient, structure.mu()),
-    )
-    .map_err(|e| anyhow!("{label}: detector: {e}"))?;
+    // The firmware's pipeline for this scene and model: the same plan, detector, model and step.
+    let plan = pipeline::plan_for(scene, model).map_err(|e| anyhow!("{label}: {e}"))?;
     let zero_at_stick = opts.on_stick == StickPolicy::Zero;
-    let mut est = ModelEstimator::new(model, structure, rate, zero_at_stick)
-        .map_err(|e| anyhow!("{label}: estimator: {e}"))?;
-    let mut ideal = est.clone();
+    let pipe_opts = pipeline::Options {
+        zero_at_stick,
+        ..pipeline::Options::default()
+    };
+    let mut pipe = pipeline::build(&plan, pipe_opts).map_err(|e| anyhow!("{label}: {e}"))?;
+    let mut ideal = pipeline::model(&plan, pipe_opts).map_err(|e| anyhow!("{label}: {e}"))?;
     // The rectangular model on the same detected events, for comparison.
     let mut rect =
         Estimator32::new(structure, rate).map_err(|e| anyhow!("{label}: estimator: {e}"))?;
@@ -625,7 +622,7 @@ pub fn run<W: Write>(
     let mut rect_err = ErrStats::default();
     // Revised predictions: each sample once every event that can reach back to it is known (the
     // detector's stick window plus its fits), compared with the truth kept for that long.
-    let revision_delay = (detector.max_age_samples() + 8) as u64;
+    let revision_delay = (pipe.max_age_samples() + 8) as u64;
     let mut rev_err = ErrStats::default();
     let mut truth_ring: std::collections::VecDeque<f64> = std::collections::VecDeque::new();
     let mut ideal_err = ErrStats::default();
@@ -653,49 +650,57 @@ pub fn run<W: Write>(
                 .ok_or_else(|| anyhow!("{label}: no truth sample at t = {t} s (sample {k})"))?;
             let f = sensors.measure(k, &s);
 
-            // The detector on the measured slip; its slip starts and reversals go to the estimator.
-            let event = detector.process(&f);
+            // The pipeline's step: detector, its event to the model, the prediction.
+            let sample = sample_of(&f);
+            let frame = pipe.step(&sample);
+            let event = frame.event;
             let mut pushed = 0i32;
             if let Some(e) = event {
-                let age = e.age_samples();
+                let age = e.age_samples;
+                let stick = e.is_stick();
                 let mark = EventMark {
                     time_s: t - age as f64 / rate,
                     detected_at_s: t,
-                    level: e.friction_level() as f64,
-                    stick: matches!(e, SlipEvent::Stick { .. }),
+                    level: f64::from(e.level),
+                    stick,
                 };
-                let used = est
-                    .push(e.friction_level(), mark.stick, age)
-                    .map_err(|err| {
-                        anyhow!("{label}: estimator rejected the event {e:?} at t = {t} s: {err}")
-                    })?;
-                if used && !mark.stick {
-                    pushed = e.friction_level() as i32;
+                if frame.flags & flags::EVENT_REJECTED != 0 {
+                    bail!("{label}: the estimator rejected the event {e:?} at t = {t} s");
                 }
-                if !mark.stick || zero_at_stick {
-                    let level = if mark.stick { 0.0 } else { e.friction_level() };
+                if frame.flags & flags::EVENT_PUSHED != 0 && !stick {
+                    pushed = i32::from(e.level);
+                }
+                if !stick || zero_at_stick {
+                    let level = if stick { 0.0 } else { f32::from(e.level) };
                     rect.push_reversal(level, age).map_err(|err| {
                         anyhow!("{label}: estimator rejected the event {e:?} at t = {t} s: {err}")
                     })?;
                 }
                 detected.push(mark);
             }
-            // The ideal estimator: the truth's own slip starts and reversals, exact ages.
+            let pred = frame.prediction;
+            // The ideal estimator: the truth's own slip starts, reversals and sticks, exact ages.
             while let Some(ev) = events.get(next_true).filter(|ev| ev.time_s <= t) {
                 let (level, stick) = level_of(ev.kind);
-                {
-                    let age = ((t - ev.time_s) * rate) as f32;
-                    ideal.push(level as f32, stick, age).map_err(|err| {
-                        anyhow!(
-                            "{label}: ideal estimator rejected the true event at t = {} s: {err}",
-                            ev.time_s
-                        )
-                    })?;
-                }
+                let e = Event {
+                    kind: if stick {
+                        FrameEventKind::Stick
+                    } else {
+                        FrameEventKind::Reversal
+                    },
+                    level: level as i8,
+                    age_samples: ((t - ev.time_s) * rate) as f32,
+                };
+                ideal.push(&e).map_err(|err| {
+                    anyhow!(
+                        "{label}: ideal estimator rejected the true event at t = {} s: {err}",
+                        ev.time_s
+                    )
+                })?;
                 next_true += 1;
             }
-            let pred = est.update(f.table_accel_m_s2, f.top_accel_m_s2);
-            let ideal_pred = ideal.update(f.table_accel_m_s2, f.top_accel_m_s2);
+            let (ideal_pred, _) = pipeline::model_step(ideal.as_mut(), None, &sample)
+                .map_err(|err| anyhow!("{label}: ideal estimator at t = {t} s: {err}"))?;
             let rect_pred = rect.update();
 
             let truth_top = s.top_accel_m_s2;
@@ -705,7 +710,7 @@ pub fn run<W: Write>(
             if k >= revision_delay {
                 let d = k - revision_delay;
                 let want = truth_ring.pop_front().unwrap_or(f64::NAN);
-                if let Some(r) = est.revised(d) {
+                if let Some(r) = pipe.revised(d) {
                     rev_err.add(scene.time(d), r as f64, want);
                 }
             }
@@ -720,9 +725,7 @@ pub fn run<W: Write>(
             };
             let (ev_name, age) = match event {
                 None => ("", None),
-                Some(SlipEvent::SlipStart { age_samples, .. }) => ("slip_start", Some(age_samples)),
-                Some(SlipEvent::Reversal { age_samples, .. }) => ("reversal", Some(age_samples)),
-                Some(SlipEvent::Stick { age_samples }) => ("stick", Some(age_samples)),
+                Some(e) => (e.kind.name(), Some(e.age_samples)),
             };
             write!(
                 out,
@@ -763,11 +766,11 @@ pub fn run<W: Write>(
     let first = scene.samples.saturating_sub(truth_ring.len() as u64);
     for (i, want) in truth_ring.iter().enumerate() {
         let d = first + i as u64;
-        if let Some(r) = est.revised(d) {
+        if let Some(r) = pipe.revised(d) {
             rev_err.add(scene.time(d), r as f64, *want);
         }
     }
-    let revised = matches!(est, ModelEstimator::StickSlip { .. });
+    let revised = model != Model::Rectangular;
 
     // True events up to the last sample.
     let true_events: Vec<EventMark> = events
@@ -804,7 +807,7 @@ pub fn run<W: Write>(
             .count(),
         sticks: count(&true_events, true),
     };
-    let mu = est.mu_estimate();
+    let mu = pipe.mu_estimate();
     let estimator = EstimatorStats {
         model: model.name(),
         model_reason,
@@ -843,7 +846,7 @@ pub fn run<W: Write>(
         rate_hz: rate,
         duration_s: scene.duration_s,
         out: opts.out_name.clone(),
-        detector: DetectorReport::of(&detector),
+        detector: DetectorReport::of(&plan),
         truth: truth_stats,
         estimator,
         detection,

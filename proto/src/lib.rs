@@ -11,8 +11,8 @@
 //!   small traits;
 //! * [`pipeline`]: **the** per-sample step (flags → detector → events → model), run by the
 //!   firmware, by `host-sim qemu`'s check and by `host-sim run`;
-//! * [`stream`] (feature `defmt`): the defmt messages a frame and the counters are streamed as,
-//!   and their field names, which the host decoder reads back by type.
+//! * [`stream`]: the defmt messages a frame, the counters and the plan are streamed as (feature
+//!   `defmt`), and their names and field keys, which the host decoder reads back by type.
 //!
 //! `#![no_std]`, no allocation, no panics on data paths.
 #![no_std]
@@ -34,13 +34,14 @@ pub mod log;
 pub mod model;
 pub mod pipeline;
 pub mod plan;
-#[cfg(feature = "defmt")]
 pub mod stream;
 
 pub use channel::{Channel, CHANNELS};
 pub use detector::{AccelerationDetector, DetectorInput, DisplacementDetector, EventDetector};
 pub use event::{Event, EventKind};
 pub use frame::{Frame, Sample};
-pub use model::{FromPlan, Model, ModelKind, Pushed, RectangularModel, StickSlipModel};
+pub use model::{
+    FixedBaseModel, FromPlan, Model, ModelKind, Pushed, RectangularModel, StickSlipModel,
+};
 pub use pipeline::{EventSource, Pipeline, Stats, Step, BATCH};
 pub use plan::{DetectorPlan, Plan, PlanError, Specimen};

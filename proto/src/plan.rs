@@ -58,6 +58,8 @@ pub enum PlanError {
     Words,
     /// The detector type does not match the plan's detector or ring.
     Detector,
+    /// The model type does not match the plan's model.
+    Model,
 }
 
 impl From<Error> for PlanError {
@@ -77,6 +79,7 @@ impl core::fmt::Display for PlanError {
             ),
             PlanError::Words => f.write_str("malformed plan words"),
             PlanError::Detector => f.write_str("the detector does not match the plan"),
+            PlanError::Model => f.write_str("the model does not match the plan"),
         }
     }
 }
@@ -159,27 +162,23 @@ impl Plan {
     }
 
     /// The plan as words (version [`WORDS_VERSION`]): every field, floats by their bits.
-    pub fn to_words(&self) -> [u32; WORDS] {
-        let mut w = Words::default();
+    pub const fn to_words(&self) -> [u32; WORDS] {
+        let mut w = Words([0; WORDS], 0);
         w.u32(WORDS_VERSION);
         w.u32(self.model as u32);
         let s = &self.specimen;
         let p = &s.structure;
-        for v in [
-            p.m1_kg,
-            p.m2_kg,
-            p.natural_frequency_hz,
-            p.damping_ratio,
-            p.friction_coefficient,
-            p.gravity_m_s2,
-            s.static_friction_coefficient,
-            s.sample_rate_hz,
-            s.disp_noise_rms_m,
-            s.accel_noise_rms_m_s2,
-            s.disp_range_m,
-        ] {
-            w.f64(v);
-        }
+        w.f64(p.m1_kg);
+        w.f64(p.m2_kg);
+        w.f64(p.natural_frequency_hz);
+        w.f64(p.damping_ratio);
+        w.f64(p.friction_coefficient);
+        w.f64(p.gravity_m_s2);
+        w.f64(s.static_friction_coefficient);
+        w.f64(s.sample_rate_hz);
+        w.f64(s.disp_noise_rms_m);
+        w.f64(s.accel_noise_rms_m_s2);
+        w.f64(s.disp_range_m);
         match self.detector {
             DetectorPlan::Displacement(d) => {
                 w.u32(0);
@@ -209,22 +208,30 @@ impl Plan {
         w.u32(c.min_samples);
         w.u32(c.identify_every);
         w.f64(c.observer_bandwidth);
-        for &b in &self.coefficients {
-            w.u32(b);
+        let mut i = 0;
+        while i < COEFFICIENT_WORDS {
+            w.u32(self.coefficients[i]);
+            i += 1;
         }
         w.0
     }
 
-    /// The plan of its words ([`Self::to_words`]).
-    pub fn from_words(words: &[u32; WORDS]) -> Result<Self, PlanError> {
+    /// The plan of its words ([`Self::to_words`]). A `const fn`: the firmware restores its plan
+    /// at compile time, so the plan's numbers are constants in its code.
+    pub const fn from_words(words: &[u32; WORDS]) -> Result<Self, PlanError> {
         let mut r = Reader { w: words, i: 0 };
         if r.u32() != WORDS_VERSION {
             return Err(PlanError::Words);
         }
-        let model = u8::try_from(r.u32())
-            .ok()
-            .and_then(ModelKind::from_code)
-            .ok_or(PlanError::Words)?;
+        let code = r.u32();
+        let model = if code > u8::MAX as u32 {
+            None
+        } else {
+            ModelKind::from_code(code as u8)
+        };
+        let Some(model) = model else {
+            return Err(PlanError::Words);
+        };
         let structure = StructureParams {
             m1_kg: r.f64(),
             m2_kg: r.f64(),
@@ -242,7 +249,11 @@ impl Plan {
             disp_range_m: r.f64(),
         };
         let kind = r.u32();
-        let (x, a, b, c, flag) = (r.u32(), r.usize(), r.usize(), r.usize(), r.u32() != 0);
+        let x = r.u32();
+        let a = r.usize();
+        let b = r.usize();
+        let c = r.usize();
+        let flag = r.u32() != 0;
         let detector = match kind {
             0 => DetectorPlan::Displacement(DetectorConfig {
                 hysteresis_m: f32::from_bits(x),
@@ -259,7 +270,10 @@ impl Plan {
             }),
             _ => return Err(PlanError::Words),
         };
-        let (ring, max_age, history, storage) = (r.usize(), r.usize(), r.usize(), r.usize());
+        let ring = r.usize();
+        let max_age = r.usize();
+        let history = r.usize();
+        let storage = r.usize();
         let stick_slip = StickSlipConfig {
             identify_mu: r.u32() != 0,
             use_identified_mu: r.u32() != 0,
@@ -269,8 +283,10 @@ impl Plan {
             observer_bandwidth: r.f64(),
         };
         let mut coefficients = [0u32; COEFFICIENT_WORDS];
-        for c in coefficients.iter_mut() {
-            *c = r.u32();
+        let mut i = 0;
+        while i < COEFFICIENT_WORDS {
+            coefficients[i] = r.u32();
+            i += 1;
         }
         if r.i != WORDS {
             return Err(PlanError::Words);
@@ -289,13 +305,19 @@ impl Plan {
     }
 
     /// FNV-1a (32 bit) of the plan's words: the firmware reports it, the host compares it.
-    pub fn digest(&self) -> u32 {
+    pub const fn digest(&self) -> u32 {
+        let words = self.to_words();
         let mut h: u32 = 0x811c_9dc5;
-        for w in self.to_words() {
-            for b in w.to_le_bytes() {
-                h ^= u32::from(b);
+        let mut i = 0;
+        while i < WORDS {
+            let bytes = words[i].to_le_bytes();
+            let mut j = 0;
+            while j < 4 {
+                h ^= bytes[j] as u32;
                 h = h.wrapping_mul(0x0100_0193);
+                j += 1;
             }
+            i += 1;
         }
         h
     }
@@ -304,23 +326,21 @@ impl Plan {
 /// Writes words in order.
 struct Words([u32; WORDS], usize);
 
-impl Default for Words {
-    fn default() -> Self {
-        Words([0; WORDS], 0)
-    }
-}
-
 impl Words {
-    fn u32(&mut self, v: u32) {
-        if let Some(s) = self.0.get_mut(self.1) {
-            *s = v;
+    const fn u32(&mut self, v: u32) {
+        if self.1 < WORDS {
+            self.0[self.1] = v;
         }
         self.1 += 1;
     }
-    fn usize(&mut self, v: usize) {
-        self.u32(u32::try_from(v).unwrap_or(u32::MAX));
+    const fn usize(&mut self, v: usize) {
+        self.u32(if v > u32::MAX as usize {
+            u32::MAX
+        } else {
+            v as u32
+        });
     }
-    fn f64(&mut self, v: f64) {
+    const fn f64(&mut self, v: f64) {
         let b = v.to_bits();
         self.u32(b as u32);
         self.u32((b >> 32) as u32);
@@ -334,17 +354,17 @@ struct Reader<'a> {
 }
 
 impl Reader<'_> {
-    fn u32(&mut self) -> u32 {
-        let v = self.w.get(self.i).copied().unwrap_or(0);
+    const fn u32(&mut self) -> u32 {
+        let v = if self.i < WORDS { self.w[self.i] } else { 0 };
         self.i += 1;
         v
     }
-    fn usize(&mut self) -> usize {
+    const fn usize(&mut self) -> usize {
         self.u32() as usize
     }
-    fn f64(&mut self) -> f64 {
-        let lo = u64::from(self.u32());
-        let hi = u64::from(self.u32());
+    const fn f64(&mut self) -> f64 {
+        let lo = self.u32() as u64;
+        let hi = self.u32() as u64;
         f64::from_bits(lo | (hi << 32))
     }
 }

@@ -1,14 +1,17 @@
-//! The defmt messages the firmware streams (feature `defmt`). Every message is a name followed
+//! The defmt messages the firmware streams (the `emit_*` functions: feature `defmt`). Every message is a name followed
 //! by `key={=type}` fields; the host decodes them with `defmt-decoder` by their typed fields
 //! (name, key, value), not by parsing the text. The names and keys are listed here
 //! ([`FRAME_FIELDS`], [`EVENT_FIELDS`], [`STATS_FIELDS`], [`PLAN_FIELDS`]) for the host decoder.
 //!
-//! * `sample`: one [`Frame`]: [`FRAME_FIELDS`], then [`EVENT_FIELDS`] when it has an event;
-//! * `stats`: the [`Stats`] of the run;
-//! * `plan`: the plan the image was built with ([`Plan::digest`] and its sizes).
+//! * `sample`: one `Frame`: [`FRAME_FIELDS`], then [`EVENT_FIELDS`] when it has an event;
+//! * `stats`: the `Stats` of the run;
+//! * `plan`: the plan the image was built with (its digest and sizes).
 
+#[cfg(feature = "defmt")]
 use crate::frame::Frame;
+#[cfg(feature = "defmt")]
 use crate::pipeline::Stats;
+#[cfg(feature = "defmt")]
 use crate::plan::Plan;
 
 /// Name of a frame's message.
@@ -21,7 +24,7 @@ pub const FRAME_FIELDS: [&str; 7] = ["idx", "flags", "table", "base", "top", "di
 pub const EVENT_FIELDS: [&str; 3] = ["ev", "level", "age"];
 /// Name of the counters' message.
 pub const STATS: &str = "stats";
-/// Fields of the counters (u32 each), in [`Stats`] order.
+/// Fields of the counters (u32 each), in `Stats` order.
 pub const STATS_FIELDS: [&str; 8] = [
     "samples", "invalid", "dropped", "events", "pushed", "rejected", "sticks", "clamped",
 ];
@@ -34,6 +37,7 @@ pub const PLAN_FIELDS: [&str; 7] = [
 ];
 
 /// Stream one frame.
+#[cfg(feature = "defmt")]
 pub fn emit_frame(f: &Frame) {
     match &f.event {
         None => defmt::info!(
@@ -63,6 +67,7 @@ pub fn emit_frame(f: &Frame) {
 }
 
 /// Stream the counters of a run.
+#[cfg(feature = "defmt")]
 pub fn emit_stats(s: &Stats) {
     defmt::info!(
         "stats samples={=u32} invalid={=u32} dropped={=u32} events={=u32} pushed={=u32} rejected={=u32} sticks={=u32} clamped={=u32}",
@@ -77,11 +82,13 @@ pub fn emit_stats(s: &Stats) {
     );
 }
 
-/// Stream the plan the image runs (its digest and sizes).
-pub fn emit_plan(p: &Plan) {
+/// Stream the plan the image runs: its digest ([`Plan::digest`], computed when the image was
+/// built) and sizes.
+#[cfg(feature = "defmt")]
+pub fn emit_plan(p: &Plan, digest: u32) {
     defmt::info!(
         "plan digest={=u32} model={=u8} rate_hz={=f64} ring={=u32} max_age={=u32} history={=u32} storage={=u32}",
-        p.digest(),
+        digest,
         p.model as u8,
         p.specimen.sample_rate_hz,
         p.ring as u32,

@@ -82,14 +82,8 @@ pub fn run() -> ! {
     };
     let painted = stack::paint();
     let mut ticks = bench::Ticks::new(cp.SYST);
-    let plan = match plan::restore() {
-        Ok(p) => p,
-        Err(e) => {
-            defmt::error!("the compiled-in plan is invalid: {}", e);
-            exit(status::STRUCTURE)
-        }
-    };
-    ssvr_proto::stream::emit_plan(&plan);
+    let plan = plan::PLAN;
+    plan::emit();
 
     let mut cmdline = [0u8; 256];
     let path = log_path(&mut cmdline);

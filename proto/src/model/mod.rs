@@ -1,7 +1,7 @@
 //! "Model only what a scene needs": the estimator models, their settings (written once, for the
 //! firmware and the host), and the one trait the pipeline drives them through.
 //!
-//! * **fixed-base** ([`StickSlipModel`] with events off): the base never slides: the top mass is
+//! * **fixed-base** ([`FixedBaseModel`]: the stick-slip estimator, events off): the base never slides: the top mass is
 //!   a fixed-base oscillator driven by the measured table acceleration, no identification
 //!   ([`FIXED_BASE_CONFIG`]);
 //! * **rectangular** ([`RectangularModel`]): the base reciprocates continuously: the paper's
@@ -13,7 +13,7 @@ mod rectangular;
 mod stick_slip;
 
 pub use rectangular::RectangularModel;
-pub use stick_slip::{StickSlipF32, StickSlipModel};
+pub use stick_slip::{FixedBaseModel, StickSlipF32, StickSlipModel};
 
 use crate::event::Event;
 use crate::frame::Frame;

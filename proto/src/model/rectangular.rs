@@ -42,6 +42,9 @@ impl RectangularModel {
 
 impl FromPlan for RectangularModel {
     fn from_plan(plan: &Plan) -> Result<Self, PlanError> {
+        if plan.model != ModelKind::Rectangular {
+            return Err(PlanError::Model);
+        }
         let structure = Structure::new(plan.specimen.structure).map_err(PlanError::Core)?;
         Estimator32::new(&structure, plan.specimen.sample_rate_hz)
             .map(Self::new)

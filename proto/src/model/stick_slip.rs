@@ -20,11 +20,11 @@ use ssvr_core::Error;
 /// The stick-slip estimator in f32 with storage for `H` samples of history.
 pub type StickSlipF32<const H: usize> = StickSlipEstimator<f32, F32Poly, H>;
 
-/// The stick-slip model (events on) or the fixed-base model (events off).
+/// The stick-slip model (`EVENTS` true: events pushed) or, with `EVENTS` false, the fixed-base
+/// model ([`FixedBaseModel`]: no event pushed, so the image holds no event code).
 #[derive(Debug, Clone)]
-pub struct StickSlipModel<const H: usize> {
+pub struct StickSlipModel<const H: usize, const EVENTS: bool = true> {
     est: StickSlipF32<H>,
-    events: bool,
     max_age: f32,
     table: [f32; BATCH],
     top: [f32; BATCH],
@@ -43,13 +43,14 @@ fn inputs(f: &Frame) -> (f32, f32) {
     (f.channels[Channel::TableAccel.index()], top)
 }
 
-impl<const H: usize> StickSlipModel<H> {
-    /// The model on an estimator: `events` false is the fixed-base model; events older than
-    /// `max_age` samples are pushed with that age.
-    pub fn new(est: StickSlipF32<H>, events: bool, max_age: f32) -> Self {
+/// The fixed-base model: the stick-slip estimator held stuck, no event pushed.
+pub type FixedBaseModel<const H: usize> = StickSlipModel<H, false>;
+
+impl<const H: usize, const EVENTS: bool> StickSlipModel<H, EVENTS> {
+    /// The model on an estimator; events older than `max_age` samples are pushed with that age.
+    pub fn new(est: StickSlipF32<H>, max_age: f32) -> Self {
         Self {
             est,
-            events,
             max_age,
             table: [0.0; BATCH],
             top: [0.0; BATCH],
@@ -63,25 +64,29 @@ impl<const H: usize> StickSlipModel<H> {
     }
 }
 
-impl<const H: usize> FromPlan for StickSlipModel<H> {
+impl<const H: usize, const EVENTS: bool> FromPlan for StickSlipModel<H, EVENTS> {
     /// The estimator restored from the plan's coefficients (computed in f64 and rounded to f32
     /// when the plan was made: the firmware needs no f64 start-up code), with the plan's
     /// settings and history.
     fn from_plan(plan: &Plan) -> Result<Self, PlanError> {
+        let want = if EVENTS {
+            ModelKind::StickSlip
+        } else {
+            ModelKind::FixedBase
+        };
+        if plan.model != want {
+            return Err(PlanError::Model);
+        }
         let c = StickSlipCoefficients::from_bits(&plan.coefficients).ok_or(PlanError::Words)?;
         let est = StickSlipF32::<H>::from_coefficients(c, plan.stick_slip, plan.history)
             .map_err(PlanError::Core)?;
-        Ok(Self::new(
-            est,
-            plan.model == ModelKind::StickSlip,
-            plan.max_age as f32,
-        ))
+        Ok(Self::new(est, plan.max_age as f32))
     }
 }
 
-impl<const H: usize> Model for StickSlipModel<H> {
+impl<const H: usize, const EVENTS: bool> Model for StickSlipModel<H, EVENTS> {
     fn kind(&self) -> ModelKind {
-        if self.events {
+        if EVENTS {
             ModelKind::StickSlip
         } else {
             ModelKind::FixedBase
@@ -90,7 +95,7 @@ impl<const H: usize> Model for StickSlipModel<H> {
 
     #[inline]
     fn push(&mut self, e: &Event) -> Result<Pushed, Error> {
-        if !self.events {
+        if !EVENTS {
             return Ok(Pushed::No);
         }
         let phase = if e.is_stick() { 0 } else { e.level };

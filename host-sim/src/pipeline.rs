@@ -1,0 +1,170 @@
+//! The host's side of the one pipeline (`ssvr_proto::Pipeline`): the plan of a scene and a model
+//! ([`plan_for`]: the same `Plan::new` the firmware's build runs), the pipeline built from it
+//! whatever its model and ring ([`build`]: the firmware's model and detector types, picked at
+//! run time), and a measured sensor frame as the pipeline's sample ([`sample_of`]).
+//! `host-sim run` predicts with it, and `host-sim qemu` checks the firmware's frames against it.
+
+use crate::scene::Scene;
+use crate::sensors::{SensorFrame, FLAG_ACCEL_SATURATED, FLAG_DISP_SATURATED};
+use anyhow::{anyhow, bail, Result};
+use ssvr_proto::plan::MAX_HISTORY;
+use ssvr_proto::{
+    flags, AccelerationDetector, DetectorPlan, DisplacementDetector, EventDetector, EventSource,
+    FixedBaseModel, FromPlan, ModelKind, Pipeline, Plan, RectangularModel, Sample, Specimen, Step,
+    StickSlipModel,
+};
+
+/// What the controller is told of a scene's specimen and sensors.
+pub fn specimen_of(scene: &Scene) -> Specimen {
+    Specimen {
+        structure: *scene.structure.params(),
+        static_friction_coefficient: scene.static_friction_coefficient,
+        sample_rate_hz: scene.rate_hz,
+        disp_noise_rms_m: scene.sensors.disp_noise_rms_m,
+        accel_noise_rms_m_s2: scene.sensors.accel_noise_rms_m_s2,
+        disp_range_m: scene.sensors.disp_range_m,
+    }
+}
+
+/// The plan of a scene and a model (what the firmware built for them runs).
+pub fn plan_for(scene: &Scene, model: ModelKind) -> Result<Plan> {
+    Plan::new(specimen_of(scene), model)
+        .map_err(|e| anyhow!("no {} pipeline for the scene: {e}", model.name()))
+}
+
+/// Options of a host pipeline beyond the plan.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Options {
+    /// Where the events come from.
+    pub source: EventSource,
+    /// The rectangular model pushes level 0 at a stick instead of keeping its level.
+    pub zero_at_stick: bool,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Self {
+            source: EventSource::Detector,
+            zero_at_stick: false,
+        }
+    }
+}
+
+fn with<M: ssvr_proto::Model + 'static, D: EventDetector + 'static>(
+    plan: &Plan,
+    model: M,
+    opts: Options,
+) -> Result<Box<dyn Step>> {
+    let d = D::from_plan(plan).map_err(|e| anyhow!("detector: {e}"))?;
+    Ok(Box::new(Pipeline::new(
+        model,
+        d,
+        opts.source,
+        plan.disp_range_m(),
+    )))
+}
+
+fn with_model<D: EventDetector + 'static>(plan: &Plan, opts: Options) -> Result<Box<dyn Step>> {
+    match plan.model {
+        ModelKind::Rectangular => {
+            let m = RectangularModel::from_plan(plan)
+                .map_err(|e| anyhow!("estimator: {e}"))?
+                .with_zero_at_stick(opts.zero_at_stick);
+            with::<_, D>(plan, m, opts)
+        }
+        ModelKind::StickSlip => {
+            let m = StickSlipModel::<MAX_HISTORY>::from_plan(plan)
+                .map_err(|e| anyhow!("estimator: {e}"))?;
+            with::<_, D>(plan, m, opts)
+        }
+        ModelKind::FixedBase => {
+            let m = FixedBaseModel::<MAX_HISTORY>::from_plan(plan)
+                .map_err(|e| anyhow!("estimator: {e}"))?;
+            with::<_, D>(plan, m, opts)
+        }
+    }
+}
+
+/// The pipeline of a plan at sample 0: the firmware's model and detector types (the stick-slip
+/// estimator with the host's storage of [`MAX_HISTORY`] samples and the plan's history: the
+/// same results as the firmware's storage), the ring picked from the plan.
+pub fn build(plan: &Plan, opts: Options) -> Result<Box<dyn Step>> {
+    macro_rules! rings {
+        ($det:ident, $($n:literal)*) => {
+            match plan.ring {
+                $($n => with_model::<$det<$n>>(plan, opts),)*
+                n => bail!("no host detector with a ring of {n} samples"),
+            }
+        };
+    }
+    match plan.detector {
+        DetectorPlan::Displacement(_) => rings!(DisplacementDetector, 8 16 32 64 128 256 512 1024),
+        DetectorPlan::SlipAcceleration(_) => {
+            rings!(AccelerationDetector, 8 16 32 64 128 256 512 1024)
+        }
+    }
+}
+
+/// A measured frame as the pipeline's sample: a saturated accelerometer is `SATURATED`, a
+/// saturated displacement `SATURATED | DISP_INVALID` (as the sensor log records them).
+pub fn sample_of(f: &SensorFrame) -> Sample {
+    let mut fl = 0;
+    if f.flags & FLAG_ACCEL_SATURATED != 0 {
+        fl |= flags::SATURATED;
+    }
+    if f.flags & FLAG_DISP_SATURATED != 0 {
+        fl |= flags::SATURATED | flags::DISP_INVALID;
+    }
+    Sample {
+        channels: [
+            f.table_accel_m_s2,
+            f.base_accel_m_s2,
+            f.top_accel_m_s2,
+            f.disp_m,
+        ],
+        flags: fl,
+        reversal: None,
+    }
+}
+
+/// The model of a plan alone, at rest (to drive it with other events than the detector's, e.g.
+/// the truth's own in `host-sim run`'s "ideal" estimator).
+pub fn model(plan: &Plan, opts: Options) -> Result<Box<dyn ssvr_proto::Model>> {
+    Ok(match plan.model {
+        ModelKind::Rectangular => Box::new(
+            RectangularModel::from_plan(plan)
+                .map_err(|e| anyhow!("estimator: {e}"))?
+                .with_zero_at_stick(opts.zero_at_stick),
+        ),
+        ModelKind::StickSlip => Box::new(
+            StickSlipModel::<MAX_HISTORY>::from_plan(plan)
+                .map_err(|e| anyhow!("estimator: {e}"))?,
+        ),
+        ModelKind::FixedBase => Box::new(
+            FixedBaseModel::<MAX_HISTORY>::from_plan(plan)
+                .map_err(|e| anyhow!("estimator: {e}"))?,
+        ),
+    })
+}
+
+/// Drive a model alone one sample at a time: push `event` (if any), then predict the sample
+/// `s` (the pipeline's steps 3–4 without a detector). Returns the prediction and whether the
+/// model used the event.
+pub fn model_step(
+    model: &mut dyn ssvr_proto::Model,
+    event: Option<&ssvr_proto::Event>,
+    s: &Sample,
+) -> Result<(f32, bool), ssvr_core::Error> {
+    let mut frame = ssvr_proto::Frame {
+        channels: s.channels,
+        flags: s.flags,
+        ..ssvr_proto::Frame::EMPTY
+    };
+    let used = match event {
+        Some(e) => model.push(e)? != ssvr_proto::Pushed::No,
+        None => false,
+    };
+    model.note_inputs(0, &frame);
+    model.predict_run(core::slice::from_mut(&mut frame), 0);
+    Ok((frame.prediction, used))
+}
