@@ -1160,7 +1160,10 @@ rate_hz = 1000.0
     }
 
     fn scenes_dir() -> PathBuf {
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes")
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("..")
+            .join("host-sim")
+            .join("scenes")
     }
 
     #[test]
