@@ -1,9 +1,54 @@
-//! ssvr-scene: scene files of the SSVR estimator (TOML, SI units) and earthquake records.
+//! ssvr-scene: scene files of the SSVR estimator, a structure, a table input, a sample rate and
+//! sensor models, in TOML with SI units, and the earthquake records they reference. One strict
+//! parser, used by host-sim and the firmware's build script.
+//!
+//! ```toml
+//! name = "table 1 specimen"          # optional
+//! duration_s = 10.0                  # samples t_k = k / rate_hz, k = 0 .. round(duration_s*rate_hz)-1
+//! gravity_m_s2 = 9.80665             # optional, this default
+//! [structure]
+//! m1_kg = 29.5
+//! m2_kg = 1.75
+//! natural_frequency_hz = 7.0         # or natural_period_s (exactly one of the two)
+//! damping_ratio = 0.05
+//! friction_coefficient = 0.2
+//! static_friction_coefficient = 0.25 # optional, >= friction_coefficient
+//! [input]
+//! kind = "harmonic"                  # amplitude_m_s2 * sin(2*pi*t/period_s)
+//! amplitude_m_s2 = 2.0
+//! period_s = 0.143
+//! [sampling]
+//! rate_hz = 10000.0
+//! [sensors]                          # optional, every key optional
+//! seed = 1
+//! ```
+//!
+//! `kind = "reversals"` prescribes the friction train itself (`half_period_s` or `times_s`, optional
+//! `initial_sign`); `kind = "record"` reads an earthquake record (`file`, `units`, optional `scale`):
+//! two-column text or a PEER NGA `.AT2` file. See the README for the full contract.
+//!
+//! Every error names the file, the line and the key: `scenes/x.toml:7: [structure] damping_ratio =
+//! 1.2 is out of range: expected 0 <= damping ratio < 1`.
+
+//!
+//! Modules: [`table_motion`] (the table acceleration of a scene); the
+//! parser's parts are private and their types re-exported here.
 #![deny(missing_docs)]
 
+mod error;
+mod input;
+mod parse;
+mod record;
 mod scene;
+mod sensors;
+mod structure;
 pub mod table_motion;
+mod units;
 
-pub use scene::{
-    parse_record, Input, Record, Reversals, Scene, SceneError, Sensors, Units, MAX_SAMPLES,
-};
+pub use error::SceneError;
+pub use input::{Input, Reversals};
+pub use record::{parse_record, Record};
+pub use scene::{Scene, MAX_SAMPLES};
+pub use sensors::Sensors;
+pub use table_motion::TableMotion;
+pub use units::Units;
