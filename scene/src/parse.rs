@@ -78,6 +78,35 @@ impl ParseContext<'_> {
         section
     }
 
+    /// The table header (`[a.b]` or `[[a.b]]`) on the line holding byte `offset`, if that line is
+    /// one: its dotted name and whether it is an array of tables.
+    fn header_at(&self, offset: usize) -> Option<(String, bool)> {
+        let end = offset.min(self.src.len());
+        let start = self.src[..end].rfind('\n').map_or(0, |i| i + 1);
+        let stop = self.src[end..]
+            .find('\n')
+            .map_or(self.src.len(), |i| end + i);
+        let line = self.src[start..stop].trim();
+        let (inner, array) = match line.strip_prefix("[[") {
+            Some(rest) => (rest.split("]]").next()?, true),
+            None => (line.strip_prefix('[')?.split(']').next()?, false),
+        };
+        Some((inner.trim().to_string(), array))
+    }
+
+    /// An unknown key that is a table header (`[friction]`): "unknown table `[friction]`" under
+    /// the parent table of the header (none for a top-level table), not under the table before it.
+    fn unknown_table(&self, offset: usize, message: &str) -> Option<String> {
+        let rest = message.strip_prefix("unknown key `")?;
+        let (_, rest) = rest.split_once('`')?;
+        let (name, array) = self.header_at(offset)?;
+        let (open, close) = if array { ("[[", "]]") } else { ("[", "]") };
+        let parent = name
+            .rsplit_once('.')
+            .map_or(String::new(), |(p, _)| format!("[{}] ", p.trim()));
+        Some(format!("{parent}unknown table `{open}{name}{close}`{rest}"))
+    }
+
     /// The key whose value contains byte `offset`: the identifier before the nearest `=` before it.
     fn key_before(&self, offset: usize) -> Option<String> {
         let end = offset.min(self.src.len());
@@ -109,6 +138,9 @@ impl ParseContext<'_> {
                 message,
             };
         };
+        if let Some(what) = self.unknown_table(span.start, &message) {
+            return self.err(span, what);
+        }
         let section = self.section_at(span.start);
         let value_error = [
             "invalid type",

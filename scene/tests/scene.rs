@@ -133,16 +133,46 @@ fn unknown_keys_are_named_with_their_line() {
         16,
         &["[sensors]", "unknown key `noise`"],
     );
-    error_at(
+    // An unknown table is named as a table at its header, not as a key of the table before it.
+    let e = error_at(
         &format!("{BASE}[extra]\nx = 1\n"),
         15,
-        &["unknown key `extra`"],
+        &["unknown table `[extra]`"],
     );
+    assert!(!e.message.contains("[sampling]"), "{e}");
     // A key of another input kind.
     error_at(
         &BASE.replace("period_s = 0.143", "period_s = 0.143\nhalf_period_s = 0.07"),
         13,
         &["[input] half_period_s", "kind = \"harmonic\""],
+    );
+}
+
+#[test]
+fn unknown_tables_are_named_at_their_header() {
+    // A top-level table: no `[structure] unknown key` (the table before it).
+    let text = BASE.replace("[input]", "[friction]\nmu = 0.2\n[input]");
+    let e = error_at(&text, 9, &["unknown table `[friction]`"]);
+    assert!(e.message.starts_with("unknown table `[friction]`"), "{e}");
+    assert!(!e.message.contains("[structure]"), "{e}");
+    // An array of tables.
+    error_at(
+        &format!("{BASE}[[runs]]\nx = 1\n"),
+        15,
+        &["unknown table `[[runs]]`"],
+    );
+    // A sub-table: named under its parent.
+    let e = error_at(
+        &BASE.replace("[input]", "[structure.extra]\nx = 1\n[input]"),
+        9,
+        &["[structure] unknown table `[structure.extra]`"],
+    );
+    assert!(e.message.starts_with("[structure] unknown table"), "{e}");
+    // A key is still a key of the table it is in.
+    error_at(
+        &BASE.replace("[input]", "friction = 1\n[input]"),
+        9,
+        &["[structure] unknown key `friction`"],
     );
 }
 
