@@ -29,26 +29,44 @@
 //!
 //! Every error names the file, the line and the key: `scenes/x.toml:7: [structure] damping_ratio =
 //! 1.2 is out of range: expected 0 <= damping ratio < 1`.
-
 //!
-//! Modules: [`table_motion`] (the table acceleration of a scene); the
-//! parser's parts are private and their types re-exported here.
+//! Board settings, for the firmware's board image, are optional in every scene: `[adc]` (`gains`,
+//! `osr`) and `[sensors.<channel>]` (`volts_per_unit`, `offset_volts`) for the channels
+//! `table_accel`, `base_accel`, `top_accel` and `displacement`; see [`BoardSettings`].
+//!
+//! Entry points:
+//! * [`Scene::load`] / [`Scene::parse`]: a full scene (host-sim): `duration_s` and `[input]`
+//!   required.
+//! * [`Specimen::load`] / [`Specimen::parse`]: the specimen part only (the firmware's build
+//!   script): structure, friction, gravity, rate, sensors and board settings; `duration_s` and
+//!   `[input]` optional, validated when present. Same walk, same messages.
+//! * [`parse_record`]: an earthquake record file on its own.
+//!
+//! The parser's parts are private modules whose types are re-exported here; [`table_motion`] is
+//! the table acceleration of a scene.
 #![deny(missing_docs)]
 
+mod board;
+mod document;
 mod error;
 mod input;
 mod parse;
 mod record;
 mod scene;
 mod sensors;
+mod specimen;
 mod structure;
 pub mod table_motion;
 mod units;
 
+pub use board::{
+    BoardSettings, ChannelScale, ADC_FULL_SCALE_V, ADC_ODR_CLOCK_HZ, ADC_OSRS, CHANNELS,
+};
 pub use error::SceneError;
 pub use input::{Input, Reversals};
 pub use record::{parse_record, Record};
 pub use scene::{Scene, MAX_SAMPLES};
 pub use sensors::Sensors;
+pub use specimen::Specimen;
 pub use table_motion::TableMotion;
 pub use units::Units;

@@ -1,36 +1,12 @@
-//! The parse context (the source text and the file it came from), the document's top-level
-//! layout, and the messages every table shares: TOML errors located at `file:line` with their
-//! `[section] key`, range checks and missing keys.
+//! The parse context (the source text and the file it came from) and the messages every table
+//! shares: TOML errors located at `file:line` with their `[section] key`, range checks and
+//! missing keys.
 
 use crate::error::{line_of, SceneError};
-use crate::input::RawInput;
-use crate::sensors::RawSensors;
-use crate::structure::RawStructure;
-use serde::Deserialize;
 use ssvr_core::Error as CoreError;
 use std::ops::Range;
 use std::path::Path;
 use toml::Spanned;
-
-/// The document's top-level layout.
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct RawScene {
-    pub(crate) name: Option<String>,
-    pub(crate) duration_s: Spanned<f64>,
-    pub(crate) gravity_m_s2: Option<Spanned<f64>>,
-    pub(crate) structure: Spanned<RawStructure>,
-    pub(crate) input: Spanned<RawInput>,
-    pub(crate) sampling: Spanned<RawSampling>,
-    pub(crate) sensors: Option<Spanned<RawSensors>>,
-}
-
-/// `[sampling]`.
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct RawSampling {
-    pub(crate) rate_hz: Spanned<f64>,
-}
 
 /// The parse context of one scene document: the source text (for lines and sections) and the
 /// file it came from (named in every message; its folder anchors relative record paths).

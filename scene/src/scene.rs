@@ -1,8 +1,10 @@
 //! A validated scene: structure, table input, duration, sample rate and sensor models.
 
+use crate::board::BoardSettings;
+use crate::document::{read_scene_file, Motion};
 use crate::error::SceneError;
 use crate::input::Input;
-use crate::parse::{ParseContext, RawScene};
+use crate::parse::ParseContext;
 use crate::sensors::Sensors;
 use crate::table_motion::TableMotion;
 use ssvr_core::structure::STANDARD_GRAVITY;
@@ -33,6 +35,9 @@ pub struct Scene {
     pub input: Input,
     /// Sensor models.
     pub sensors: Sensors,
+    /// The board image's ADC configuration and channel scaling (defaults unless the scene sets
+    /// `[adc]` or `[sensors.<channel>]`).
+    pub board: BoardSettings,
 }
 
 impl Scene {
@@ -63,26 +68,37 @@ impl Scene {
                 period_s: 0.143,
             },
             sensors: Sensors::default(),
+            board: BoardSettings::defaults(10_000.0, &Sensors::default()),
         }
     }
 
     /// Read and validate a scene file. Record files resolve against the scene file's folder.
     pub fn load(path: impl AsRef<Path>) -> Result<Scene, SceneError> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|e| SceneError {
-            file: path.to_path_buf(),
-            line: None,
-            message: format!("cannot read the scene file: {e}"),
-        })?;
-        Scene::parse(&text, path)
+        Scene::parse(&read_scene_file(path)?, path)
     }
 
     /// Parse and validate scene text; `origin` names the file in messages and anchors relative
     /// record paths (its parent folder).
     pub fn parse(text: &str, origin: &Path) -> Result<Scene, SceneError> {
         let cx = ParseContext { src: text, origin };
-        let raw: RawScene = toml::from_str(text).map_err(|e| cx.toml_error(&e))?;
-        cx.build(raw)
+        let doc = cx.document(&cx.raw()?, Motion::Required)?;
+        // The walk has required both (this is a full scene).
+        let (Some((duration_s, samples)), Some(input)) = (doc.duration, doc.input) else {
+            return Err(cx.err(0..0, "missing key `duration_s` or table [input]".into()));
+        };
+        Ok(Scene {
+            name: doc.name,
+            source: Some(origin.to_path_buf()),
+            duration_s,
+            rate_hz: doc.rate_hz,
+            samples,
+            structure: doc.structure,
+            static_friction_coefficient: doc.static_friction_coefficient,
+            input,
+            sensors: doc.sensors,
+            board: doc.board,
+        })
     }
 
     /// Time of sample k (s): k / rate_hz.
@@ -123,68 +139,5 @@ impl Scene {
             Input::Reversals(r) => Some(r.train()),
             Input::Record(_) => None,
         }
-    }
-}
-
-impl ParseContext<'_> {
-    /// The whole scene.
-    fn build(&self, raw: RawScene) -> Result<Scene, SceneError> {
-        let duration = self.check(
-            None,
-            "duration_s",
-            &raw.duration_s,
-            *raw.duration_s.get_ref() > 0.0,
-            "duration_s > 0 s",
-        )?;
-        let gravity = match &raw.gravity_m_s2 {
-            Some(g) => self.check(
-                None,
-                "gravity_m_s2",
-                g,
-                *g.get_ref() > 0.0,
-                "gravity_m_s2 > 0 m/s^2",
-            )?,
-            None => STANDARD_GRAVITY,
-        };
-        let (structure, mu_s) = self.structure(&raw.structure, gravity, &raw.gravity_m_s2)?;
-        let rate_v = &raw.sampling.get_ref().rate_hz;
-        let rate = self.check(
-            Some("sampling"),
-            "rate_hz",
-            rate_v,
-            *rate_v.get_ref() > 0.0,
-            "rate_hz > 0 Hz",
-        )?;
-        let n = (duration * rate).round();
-        if !(1.0..=MAX_SAMPLES).contains(&n) {
-            return Err(self.err(
-                raw.duration_s.span(),
-                format!(
-                    "duration_s = {duration} at [sampling] rate_hz = {rate} gives {n} samples: \
-                     expected 1 <= round(duration_s * rate_hz) <= 2^53"
-                ),
-            ));
-        }
-        let input = self.input(&raw.input)?;
-        let sensors = match &raw.sensors {
-            Some(s) => self.sensors(s.get_ref())?,
-            None => Sensors::default(),
-        };
-        let name = raw.name.unwrap_or_else(|| {
-            self.origin
-                .file_stem()
-                .map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned())
-        });
-        Ok(Scene {
-            name,
-            source: Some(self.origin.to_path_buf()),
-            duration_s: duration,
-            rate_hz: rate,
-            samples: n as u64,
-            structure,
-            static_friction_coefficient: mu_s,
-            input,
-            sensors,
-        })
     }
 }

@@ -1,5 +1,6 @@
 //! Sensor models (`[sensors]`): noise, ranges and ADC resolution of the simulated sensors.
 
+use crate::board::RawChannel;
 use crate::error::SceneError;
 use crate::parse::ParseContext;
 use serde::Deserialize;
@@ -36,6 +37,7 @@ impl Default for Sensors {
     }
 }
 
+/// `[sensors]`: the simulated sensors, and the board's `[sensors.<channel>]` tables.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawSensors {
@@ -45,6 +47,36 @@ pub(crate) struct RawSensors {
     accel_adc_bits: Option<Spanned<u32>>,
     disp_noise_rms_m: Option<Spanned<f64>>,
     disp_range_m: Option<Spanned<f64>>,
+    // The board's channel scaling (validated in `board`); not spanned, as implicit tables
+    // (`displacement.volts_per_unit = 24.0`) have no span.
+    table_accel: Option<RawChannel>,
+    base_accel: Option<RawChannel>,
+    top_accel: Option<RawChannel>,
+    displacement: Option<RawChannel>,
+}
+
+impl RawSensors {
+    /// The `[sensors.<channel>]` table of channel `i` (order `board::CHANNELS`).
+    pub(crate) fn channel(&self, i: usize) -> Option<&RawChannel> {
+        [
+            &self.table_accel,
+            &self.base_accel,
+            &self.top_accel,
+            &self.displacement,
+        ][i]
+            .as_ref()
+    }
+
+    /// The range key of channel `i`'s sensor and its span, when given.
+    pub(crate) fn range_span(&self, i: usize) -> Option<(&'static str, std::ops::Range<usize>)> {
+        if i < 3 {
+            let v = self.accel_range_m_s2.as_ref()?;
+            Some(("accel_range_m_s2", v.span()))
+        } else {
+            let v = self.disp_range_m.as_ref()?;
+            Some(("disp_range_m", v.span()))
+        }
+    }
 }
 
 impl ParseContext<'_> {
