@@ -1,0 +1,174 @@
+//! A scene document: its top-level layout and the one validation walk that both a full
+//! [`Scene`](crate::Scene) and a [`Specimen`](crate::Specimen) go through.
+//!
+//! The walk checks the parts in a fixed order, so a document with several errors reports the same
+//! first one whichever entry point reads it: missing keys and tables (`duration_s`,
+//! `[structure]`, `[input]`, `[sampling]`), then `duration_s`, `gravity_m_s2`, `[structure]`,
+//! `[sampling] rate_hz`, the sample count, `[input]`, `[sensors]` and the board settings. A
+//! specimen needs no table motion: `duration_s` and `[input]` may be absent, and are validated
+//! when present.
+
+use crate::board::{BoardSettings, RawAdc};
+use crate::error::SceneError;
+use crate::input::{Input, RawInput};
+use crate::parse::ParseContext;
+use crate::scene::MAX_SAMPLES;
+use crate::sensors::{RawSensors, Sensors};
+use crate::structure::RawStructure;
+use serde::Deserialize;
+use ssvr_core::structure::STANDARD_GRAVITY;
+use ssvr_core::Structure;
+use std::path::Path;
+use toml::Spanned;
+
+/// The text of the scene file `path`.
+pub(crate) fn read_scene_file(path: &Path) -> Result<String, SceneError> {
+    std::fs::read_to_string(path).map_err(|e| SceneError {
+        file: path.to_path_buf(),
+        line: None,
+        message: format!("cannot read the scene file: {e}"),
+    })
+}
+
+/// The document's top-level layout. Tables and keys a full scene needs are optional here; the
+/// walk reports them missing, as the TOML layer would, where they are required.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawScene {
+    name: Option<String>,
+    duration_s: Option<Spanned<f64>>,
+    gravity_m_s2: Option<Spanned<f64>>,
+    structure: Option<Spanned<RawStructure>>,
+    input: Option<Spanned<RawInput>>,
+    sampling: Option<Spanned<RawSampling>>,
+    // Not spanned: a `[sensors.<channel>]` or `adc.<key>` alone defines them implicitly, and an
+    // implicit table has no span.
+    sensors: Option<RawSensors>,
+    adc: Option<RawAdc>,
+}
+
+/// `[sampling]`.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawSampling {
+    rate_hz: Spanned<f64>,
+}
+
+/// Whether the table motion (`duration_s` and `[input]`) is required.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Motion {
+    /// A full scene: both required.
+    Required,
+    /// A specimen: both optional, validated when present.
+    Optional,
+}
+
+/// The validated parts of a document.
+pub(crate) struct Document {
+    pub(crate) name: String,
+    /// `duration_s` and the sample count, when given.
+    pub(crate) duration: Option<(f64, u64)>,
+    pub(crate) rate_hz: f64,
+    pub(crate) structure: Structure,
+    pub(crate) static_friction_coefficient: f64,
+    pub(crate) input: Option<Input>,
+    pub(crate) sensors: Sensors,
+    pub(crate) board: BoardSettings,
+}
+
+impl ParseContext<'_> {
+    /// Parse the TOML layout of the document.
+    pub(crate) fn raw(&self) -> Result<RawScene, SceneError> {
+        toml::from_str(self.src).map_err(|e| self.toml_error(&e))
+    }
+
+    /// A missing top-level key or table, located as the TOML layer locates it (line 1).
+    fn required<'r, T>(&self, v: &'r Option<T>, message: &str) -> Result<&'r T, SceneError> {
+        v.as_ref()
+            .ok_or_else(|| self.err(0..0, message.to_string()))
+    }
+
+    /// Validate the document.
+    pub(crate) fn document(&self, raw: &RawScene, motion: Motion) -> Result<Document, SceneError> {
+        // Missing keys and tables first, in the order of the layout.
+        if motion == Motion::Required {
+            self.required(&raw.duration_s, "missing key `duration_s`")?;
+        }
+        let structure_table = self.required(&raw.structure, "missing table [structure]")?;
+        if motion == Motion::Required {
+            self.required(&raw.input, "missing table [input]")?;
+        }
+        let sampling = self.required(&raw.sampling, "missing table [sampling]")?;
+
+        let duration = match &raw.duration_s {
+            Some(d) => Some(self.check(
+                None,
+                "duration_s",
+                d,
+                *d.get_ref() > 0.0,
+                "duration_s > 0 s",
+            )?),
+            None => None,
+        };
+        let gravity = match &raw.gravity_m_s2 {
+            Some(g) => self.check(
+                None,
+                "gravity_m_s2",
+                g,
+                *g.get_ref() > 0.0,
+                "gravity_m_s2 > 0 m/s^2",
+            )?,
+            None => STANDARD_GRAVITY,
+        };
+        let (structure, mu_s) = self.structure(structure_table, gravity, &raw.gravity_m_s2)?;
+        let rate_v = &sampling.get_ref().rate_hz;
+        let rate = self.check(
+            Some("sampling"),
+            "rate_hz",
+            rate_v,
+            *rate_v.get_ref() > 0.0,
+            "rate_hz > 0 Hz",
+        )?;
+        let duration = match (duration, &raw.duration_s) {
+            (Some(duration), Some(d)) => {
+                let n = (duration * rate).round();
+                if !(1.0..=MAX_SAMPLES).contains(&n) {
+                    return Err(self.err(
+                        d.span(),
+                        format!(
+                            "duration_s = {duration} at [sampling] rate_hz = {rate} gives {n} \
+                             samples: expected 1 <= round(duration_s * rate_hz) <= 2^53"
+                        ),
+                    ));
+                }
+                Some((duration, n as u64))
+            }
+            _ => None,
+        };
+        let input = match &raw.input {
+            Some(table) => Some(self.input(table)?),
+            None => None,
+        };
+        let raw_sensors = raw.sensors.as_ref();
+        let sensors = match raw_sensors {
+            Some(s) => self.sensors(s)?,
+            None => Sensors::default(),
+        };
+        let board = self.board(raw.adc.as_ref(), raw_sensors, &sensors, rate)?;
+        let name = raw.name.clone().unwrap_or_else(|| {
+            self.origin
+                .file_stem()
+                .map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned())
+        });
+        Ok(Document {
+            name,
+            duration,
+            rate_hz: rate,
+            structure,
+            static_friction_coefficient: mu_s,
+            input,
+            sensors,
+            board,
+        })
+    }
+}
