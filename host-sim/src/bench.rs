@@ -31,7 +31,7 @@
 //! Error: max and RMS, in units of gμ, against the full f64 closed form (numerical error; for TFM,
 //! RFM and the truth this includes their model difference) and against the truth (model error).
 
-use crate::plots::{self, Figure, Marker, Panel, Series, Style};
+use crate::plot::figure::{self, Figure, Marker, Panel, Series, Style};
 use crate::scene::{parse_record, Input, Record, Scene, Units};
 use crate::table_motion::TableMotion;
 use crate::truth::{simulate, Truth, TruthInput};
@@ -823,7 +823,7 @@ pub fn run(opts: &BenchOptions) -> Result<Report> {
     write("bench.md", &md)?;
     for sc in &scenes {
         let path = opts.out_dir.join(format!("pareto-{}.png", sc.id));
-        plots::render_png(&pareto_figure(&report, sc), &path)?;
+        figure::render_png(&pareto_figure(&report, sc), &path)?;
     }
     Ok(report)
 }
@@ -1015,7 +1015,7 @@ fn pareto_figure(r: &Report, sc: &BenchScene) -> Figure {
                 Style::Markers(marker, 7)
             };
             merge_close_labels(&pts, &mut labels);
-            let mut s = Series::new(label, pts, plots::color(ci), style);
+            let mut s = Series::new(label, pts, figure::color(ci), style);
             s.labels = labels;
             p.series.push(s);
         }
@@ -1032,7 +1032,7 @@ fn pareto_figure(r: &Report, sc: &BenchScene) -> Figure {
         }
         p.series.insert(
             0,
-            Series::new("Pareto front", front, plots::color(8), Style::Dashed),
+            Series::new("Pareto front", front, figure::color(8), Style::Dashed),
         );
         let ymax = p
             .series

@@ -7,16 +7,16 @@
 //! * [`qemu_runner`]: build, run and decode the firmware's QEMU image; [`qemu_cmd`]: `host-sim
 //!   qemu`, every firmware prediction against the host and the closed form.
 //! * [`run`]: the main job: truth, sensors, reversal detector and the f32 estimator, sample by
-//!   sample, streamed to CSV, with error and detection statistics; [`plot`]: its figure.
+//!   sample, streamed to CSV, with error and detection statistics.
 //! * [`bench`]: `host-sim bench`, speed against error of every method; [`reproduce`]: `host-sim
-//!   reproduce`, the paper's Table 2 and figures; [`plots`]: their PNG figures.
+//!   reproduce`, the paper's Table 2 and figures.
+//! * [`plot`]: the figures: `run --plot`'s, and the PNG figures of `bench` and `reproduce`.
 #![deny(missing_docs)]
 
 pub mod bench;
 pub mod methods;
 pub mod model;
 pub mod plot;
-pub mod plots;
 pub mod qemu_cmd;
 pub mod qemu_runner;
 pub mod reproduce;

@@ -14,7 +14,7 @@
 //! Sweeps run in parallel (rayon) with a progress bar (indicatif) on standard error.
 
 use crate::bench::elcentro_scene;
-use crate::plots::{self, Figure, Marker, Panel, Series, Style};
+use crate::plot::figure::{self, Figure, Marker, Panel, Series, Style};
 use crate::table_motion::TableMotion;
 use crate::truth::{simulate, EventKind, Truth, TruthInput};
 use anyhow::{anyhow, Context, Result};
@@ -427,11 +427,11 @@ fn fig6(opts: &ReproduceOptions, path: &Path) -> Result<Fig6> {
         p.series.push(Series::new(
             "exact stick-slip truth (phase-aligned)",
             tr.clone(),
-            plots::color(8),
+            figure::color(8),
             Style::Line(1),
         ));
         p.series
-            .push(Series::new(name, data, plots::color(ci), Style::Line(2)));
+            .push(Series::new(name, data, figure::color(ci), Style::Line(2)));
         p.legend_outside = Some(340);
         p
     };
@@ -446,7 +446,7 @@ fn fig6(opts: &ReproduceOptions, path: &Path) -> Result<Fig6> {
         cols: 1,
         panel_size: (1500, 400),
     };
-    plots::render_png(&fig, path)?;
+    figure::render_png(&fig, path)?;
     Ok(Fig6 {
         tfm_gal: gal(tfm_peak),
         rfm_gal: gal(rfm_peak),
@@ -505,13 +505,13 @@ fn fig9(path: &Path) -> Result<Fig9> {
     a.series.push(Series::new(
         "friction wave F/F0 (rectangular)",
         rect(0.0, 1.0, 4000),
-        plots::color(8),
+        figure::color(8),
         Style::Dashed,
     ));
     a.series.push(Series::new(
         "RDM, eq (36)",
         sample(0.0, 1.0, 4000),
-        plots::color(0),
+        figure::color(0),
         Style::Line(2),
     ));
     a.y_range = Some((-1.8, 2.5));
@@ -524,13 +524,13 @@ fn fig9(path: &Path) -> Result<Fig9> {
     b.series.push(Series::new(
         "friction wave F/F0",
         rect(0.095, 0.16, 2000),
-        plots::color(8),
+        figure::color(8),
         Style::Dashed,
     ));
     b.series.push(Series::new(
         "RDM, eq (36)",
         sample(0.095, 0.16, 2000),
-        plots::color(0),
+        figure::color(0),
         Style::Line(2),
     ));
     b.y_range = Some((-1.8, 2.5));
@@ -541,7 +541,7 @@ fn fig9(path: &Path) -> Result<Fig9> {
         cols: 2,
         panel_size: (950, 560),
     };
-    plots::render_png(&fig, path)?;
+    figure::render_png(&fig, path)?;
     let steady = sample(0.8, 1.0, 4000)
         .iter()
         .fold(0.0f64, |m, p| m.max(p.1.abs()));
@@ -638,7 +638,7 @@ fn fig10(opts: &ReproduceOptions, path: &Path) -> Result<Fig10> {
             p.series.push(Series::new(
                 format!("T = {period:.2} s (T/T0 = {:.2})", period / t0),
                 pts,
-                plots::color(b),
+                figure::color(b),
                 Style::Line(2),
             ));
         }
@@ -653,7 +653,7 @@ fn fig10(opts: &ReproduceOptions, path: &Path) -> Result<Fig10> {
         cols: 2,
         panel_size: (1100, 620),
     };
-    plots::render_png(&fig, path)?;
+    figure::render_png(&fig, path)?;
     Ok(Fig10 {
         natural_period_s: t0,
         xis,
@@ -807,7 +807,7 @@ fn spectra(opts: &ReproduceOptions, path: &Path) -> Result<Spectra> {
             .iter()
             .map(|p| (p.natural_period_s, p.fixed_base))
             .collect(),
-        plots::color(8),
+        figure::color(8),
         Style::Dashed,
     ));
     a.series.push(Series::new(
@@ -816,7 +816,7 @@ fn spectra(opts: &ReproduceOptions, path: &Path) -> Result<Spectra> {
             .iter()
             .map(|p| (p.natural_period_s, p.truth))
             .collect(),
-        plots::color(1),
+        figure::color(1),
         Style::LineMarkers(Marker::Circle, 4),
     ));
     a.series.push(Series::new(
@@ -825,7 +825,7 @@ fn spectra(opts: &ReproduceOptions, path: &Path) -> Result<Spectra> {
             .iter()
             .map(|p| (p.natural_period_s, p.tfm))
             .collect(),
-        plots::color(0),
+        figure::color(0),
         Style::Line(2),
     ));
     a.series.push(Series::new(
@@ -834,13 +834,13 @@ fn spectra(opts: &ReproduceOptions, path: &Path) -> Result<Spectra> {
             .iter()
             .filter_map(|p| p.rfm.map(|v| (p.natural_period_s, v)))
             .collect(),
-        plots::color(2),
+        figure::color(2),
         Style::Markers(Marker::Triangle, 5),
     ));
     a.series.push(Series::new(
         "gμ",
         vec![(0.05, gmu), (2.0, gmu)],
-        plots::color(6),
+        figure::color(6),
         Style::Dashed,
     ));
     a.x_range = Some((0.045, 2.2));
@@ -858,7 +858,7 @@ fn spectra(opts: &ReproduceOptions, path: &Path) -> Result<Spectra> {
             .iter()
             .map(|p| (p.natural_period_s, p.fixed_base))
             .collect(),
-        plots::color(8),
+        figure::color(8),
         Style::Dashed,
     ));
     b.series.push(Series::new(
@@ -867,7 +867,7 @@ fn spectra(opts: &ReproduceOptions, path: &Path) -> Result<Spectra> {
             .iter()
             .map(|p| (p.natural_period_s, p.truth))
             .collect(),
-        plots::color(1),
+        figure::color(1),
         Style::LineMarkers(Marker::Circle, 4),
     ));
     b.series.push(Series::new(
@@ -876,13 +876,13 @@ fn spectra(opts: &ReproduceOptions, path: &Path) -> Result<Spectra> {
             .iter()
             .filter_map(|p| p.rdm_truth_train.map(|v| (p.natural_period_s, v)))
             .collect(),
-        plots::color(2),
+        figure::color(2),
         Style::Markers(Marker::Triangle, 5),
     ));
     b.series.push(Series::new(
         "gμ",
         vec![(0.05, gmu), (2.0, gmu)],
-        plots::color(6),
+        figure::color(6),
         Style::Dashed,
     ));
     b.x_range = Some((0.045, 2.2));
@@ -895,7 +895,7 @@ fn spectra(opts: &ReproduceOptions, path: &Path) -> Result<Spectra> {
         cols: 1,
         panel_size: (1500, 600),
     };
-    plots::render_png(&fig, path)?;
+    figure::render_png(&fig, path)?;
     Ok(Spectra {
         harmonic_a0_m_s2: a0,
         harmonic_period_s: period,
