@@ -126,8 +126,6 @@ fn errors(y: &[f64], reference: &[f64], gmu: f64) -> (f64, f64) {
     (max, (sq / y.len().max(1) as f64).sqrt())
 }
 
-// ---------------------------------------------------------------------------------------------
-
 /// Context of one scene's measurements.
 struct Ctx<'a> {
     sc: &'a BenchScene,

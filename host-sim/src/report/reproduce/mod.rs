@@ -41,8 +41,6 @@ pub struct Sweep {
     pub progress: bool,
 }
 
-// ---------------------------------------------------------------------------------------------
-
 /// Everything `reproduce` computed (also written as `results.json`).
 #[derive(Debug, Clone, Serialize)]
 pub struct Results {
