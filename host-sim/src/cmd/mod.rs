@@ -3,7 +3,8 @@
 //!
 //! * [`run`]: the main job (also `host-sim` with no command); [`qemu`]: the firmware under QEMU.
 //! * [`peak`], [`trace`], [`check`]: the methods on one scene ([`crate::methods`]).
-//! * [`bench`]: speed against error of every method; [`reproduce`]: the paper's results.
+//! * [`bench`](mod@bench): speed against error of every method; [`reproduce`]: the paper's
+//!   results.
 
 pub mod bench;
 pub mod check;

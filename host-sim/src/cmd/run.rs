@@ -13,6 +13,7 @@ use std::time::Instant;
 
 /// Arguments of `run`.
 #[derive(clap::Args, Debug)]
+#[allow(rustdoc::invalid_html_tags)] // `<scene-stem>` is help text, not HTML
 pub struct RunArgs {
     /// Scene file (TOML), or `default` (also when omitted) for the built-in default scene.
     pub scene: Option<PathBuf>,

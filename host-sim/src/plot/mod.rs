@@ -3,7 +3,7 @@
 //! * [`run`]: the `run --plot` figure (SVG or PNG); its items are re-exported here
 //!   (`plot::render`, `plot::format_of`, …).
 //! * [`figure`]: the generic PNG figure (a grid of panels of series) of `bench` and `reproduce`.
-//! * [`bench`]: the bench's Pareto figures; [`reproduce`]: the paper's figures.
+//! * [`bench`](mod@bench): the bench's Pareto figures; [`reproduce`]: the paper's figures.
 //! * `style`: the embedded font and the colour palette, shared by all.
 
 pub mod bench;

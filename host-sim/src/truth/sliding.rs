@@ -7,8 +7,8 @@ use super::piece::Piece;
 use ssvr_core::math::Libm;
 
 impl Piece {
-    /// Exact (δ, δ', x2, ẋ2) at local time τ of a piece sliding in direction `dir`, from the piece's
-    /// initial state.
+    /// Exact (δ, δ', x2, ẋ2) at local time τ of a piece sliding in direction `dir`, from the
+    /// piece's initial state.
     pub(super) fn sliding_state(
         &self,
         m: &Model,

@@ -3,7 +3,7 @@
 
 use ssvr_core::Reversal;
 
-/// a + b as an unevaluated sum (s, error), exactly (Knuth's two-sum).
+/// a + b exactly, as an unevaluated sum (s, error) (Knuth's two-sum).
 fn two_sum(a: f64, b: f64) -> (f64, f64) {
     let s = a + b;
     let bb = s - a;

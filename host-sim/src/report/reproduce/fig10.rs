@@ -23,7 +23,7 @@ pub struct Fig10 {
     pub periods_s: Vec<f64>,
     /// Mass ratios M.
     pub mass_ratios: Vec<f64>,
-    /// peaks[xi][period][M] (units of gμ).
+    /// `peaks[xi][period][M]` (units of gμ).
     pub peaks_gmu: Vec<Vec<Vec<f64>>>,
     /// Largest relative difference from the converged RFM peak at the cross-checked points.
     pub rfm_check_max_rel_diff: f64,
