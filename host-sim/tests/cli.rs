@@ -248,19 +248,3 @@ fn check_json_fields() {
         assert!((0.0..0.5).contains(&at));
     }
 }
-
-/// The former no-command summary, now `host-sim summary` (no command runs `run`: tests/run.rs).
-#[test]
-fn summary_command_summarises_the_default_scene() {
-    let out = host_sim().arg("summary").output().unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let text = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        text.contains("TFM peak") && text.contains("RFM peak") && text.contains("check"),
-        "{text}"
-    );
-}

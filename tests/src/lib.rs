@@ -3,5 +3,5 @@
 
 pub mod ode;
 
-/// The paper's Table 2 (defined once, in host-sim's `reproduce`).
-pub use host_sim::reproduce::{Table2Row, PAPER_G as PAPER_GRAVITY_M_S2, TABLE2};
+/// The paper's Table 2 (defined once, in host-sim's `report::reproduce`).
+pub use host_sim::report::reproduce::{Table2Row, PAPER_G as PAPER_GRAVITY_M_S2, TABLE2};

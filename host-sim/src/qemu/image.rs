@@ -155,7 +155,7 @@ pub fn firmware_scene_toml(scene: &Scene) -> String {
     let p = scene.structure.params();
     let s = &scene.sensors;
     format!(
-        "# Written by host-sim (qemu_runner::firmware_scene_toml): the firmware parameters of a scene.\n\
+        "# Written by host-sim (qemu::image::firmware_scene_toml): the firmware parameters of a scene.\n\
          gravity_m_s2 = {g:?}\n\n[structure]\nm1_kg = {m1:?}\nm2_kg = {m2:?}\n\
          natural_frequency_hz = {f:?}\ndamping_ratio = {xi:?}\nfriction_coefficient = {mu:?}\n\
          static_friction_coefficient = {mu_s:?}\n\n\

@@ -5,28 +5,16 @@
 //! slip starts/reversals (at their back-dated times), the detected sticks and the true events.
 //! PNG text is drawn with an embedded subset of DejaVu Sans (`assets/`), so no system font is read.
 
+use super::style::register_font;
 use crate::run::{EventMark, PlotData, Series};
 use anyhow::{anyhow, bail, Context, Result};
 use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::Path;
-use std::sync::Once;
 
 /// Figure size in pixels (width, height).
 pub const SIZE: (u32, u32) = (1600, 1000);
-
-static FONT: &[u8] = include_bytes!("../assets/DejaVuSans-subset.ttf");
-static REGISTER: Once = Once::new();
-
-fn register_font() -> Result<()> {
-    let mut result = Ok(());
-    REGISTER.call_once(|| {
-        result = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT)
-            .map_err(|_| anyhow!("the embedded font is invalid"));
-    });
-    result
-}
 
 /// The output format, from the file extension.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
