@@ -236,7 +236,7 @@ impl Scene {
             &["rate_hz", "sample_rate_hz", "sampling_rate_hz", "fs_hz"],
             path,
         );
-        if let Err(e) = ssvr_core::duhamel_recursion::Estimator32::new(&structure, rate) {
+        if let Err(e) = ssvr_core::recursion::Estimator32::new(&structure, rate) {
             panic!(
                 "scene {}: the estimator rejects rate_hz = {rate}: {e:?}",
                 path.display()

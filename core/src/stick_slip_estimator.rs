@@ -73,7 +73,7 @@
 //! then needs no f64 code but the few operations that derive the n-step maps at construction).
 
 use crate::error::{Error, Param};
-use crate::free_vibration::Kernel;
+use crate::closed_form::free_vibration::Kernel;
 use crate::math::{Real, Transcendentals};
 use crate::structure::{Regime, Structure};
 use core::marker::PhantomData;

@@ -4,9 +4,9 @@
 use crate::scene::{Input, Scene};
 use anyhow::{anyhow, bail, Context, Result};
 use serde::Serialize;
-use ssvr_core::duhamel_closed_form::DuhamelClosedForm;
-use ssvr_core::duhamel_recursion::DuhamelRecursion;
-use ssvr_core::fourier_series::{FourierResponse, Tfm};
+use ssvr_core::closed_form::duhamel::DuhamelClosedForm;
+use ssvr_core::recursion::DuhamelRecursion;
+use ssvr_core::closed_form::fourier::{FourierResponse, Tfm};
 use ssvr_core::math::{Libm, Real, Transcendentals};
 use ssvr_core::{ReversalTrain, Structure};
 use std::io::Write;
@@ -169,7 +169,7 @@ pub fn peak(scene: &Scene, method: PeakMethod, harmonics: Option<u32>) -> Result
 }
 
 fn check_harmonics(h: Option<u32>) -> Result<()> {
-    use ssvr_core::fourier_series::MAX_HARMONICS;
+    use ssvr_core::closed_form::fourier::MAX_HARMONICS;
     match h {
         Some(h) if h == 0 || h > MAX_HARMONICS => {
             bail!("--harmonics {h} is out of range: expected 1 to {MAX_HARMONICS}")

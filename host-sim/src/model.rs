@@ -15,7 +15,7 @@
 
 use crate::sensors::{SensorFrame, FLAG_ACCEL_SATURATED};
 use crate::truth::{EventKind, Truth};
-use ssvr_core::duhamel_recursion::Estimator32;
+use ssvr_core::recursion::Estimator32;
 use ssvr_core::math::F32Poly;
 use ssvr_core::phase_detector::{PhaseDetector, PhaseDetectorConfig};
 use ssvr_core::reversal_detector::{DetectorConfig, ReversalDetector, SlipEvent};

@@ -22,9 +22,9 @@ use indicatif::{ProgressBar, ProgressStyle};
 use plotters::prelude::SeriesLabelPosition;
 use rayon::prelude::*;
 use serde::Serialize;
-use ssvr_core::duhamel_closed_form::DuhamelClosedForm;
-use ssvr_core::duhamel_recursion::Estimator64;
-use ssvr_core::fourier_series::{FourierResponse, Tfm};
+use ssvr_core::closed_form::duhamel::DuhamelClosedForm;
+use ssvr_core::recursion::Estimator64;
+use ssvr_core::closed_form::fourier::{FourierResponse, Tfm};
 use ssvr_core::{Reversal, ReversalTrain, Structure, StructureParams};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -911,7 +911,7 @@ fn rdm_peak_with_train(s: &Structure, train: &[Reversal], duration: f64) -> Resu
     let rate = 2000.0;
     let mut est = Estimator64::new(s, rate).map_err(|e| anyhow!("estimator: {e}"))?;
     let t = ReversalTrain::Explicit(train);
-    let mut feeder = ssvr_core::duhamel_recursion::TrainFeeder::new(rate);
+    let mut feeder = ssvr_core::recursion::TrainFeeder::new(rate);
     let n = (duration * rate) as u64;
     let mut peak = 0.0f64;
     for k in 0..n {

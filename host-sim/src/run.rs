@@ -42,7 +42,7 @@ use crate::sensors::SensorModel;
 use crate::truth::{simulate, EventKind, Phase, TruthInput};
 use anyhow::{anyhow, bail, Context, Result};
 use serde::Serialize;
-use ssvr_core::duhamel_recursion::Estimator32;
+use ssvr_core::recursion::Estimator32;
 use ssvr_core::reversal_detector::SlipEvent;
 use std::fmt;
 use std::io::{BufWriter, Write};

@@ -24,7 +24,7 @@ pub const NAME: &str = scene::MODEL;
 
 /// The estimator of the model.
 #[cfg(ssvr_model = "rectangular")]
-pub type Estimator = ssvr_core::duhamel_recursion::Estimator32;
+pub type Estimator = ssvr_core::recursion::Estimator32;
 /// The estimator of the model: a history of `scene::HISTORY` samples in the storage that makes
 /// its steady state cheapest (`storage_for`: a multiple of the identification block plus one).
 #[cfg(not(ssvr_model = "rectangular"))]

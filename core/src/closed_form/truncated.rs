@@ -1,6 +1,6 @@
 //! The rectangular Duhamel method truncated to the `K` most recent reversals, streaming.
 //!
-//! The generalised eq (36) (see [`crate::duhamel_closed_form`]) sums one free-vibration term per
+//! The generalised eq (36) (see [`crate::closed_form::duhamel`]) sums one free-vibration term per
 //! friction reversal:
 //!
 //! ```text
@@ -11,13 +11,13 @@
 //! [`heapless::Deque`] and sums those terms at each evaluation: O(K) per sample, no allocation. The
 //! dropped terms are the truncation error; with damping it falls as e^{−a·(age of the K-th newest
 //! reversal)}, for an undamped structure it does not fall at all (every reversal rings forever, so
-//! only the full sum or the exact recursion [`crate::duhamel_recursion`] is right). The result
-//! equals [`DuhamelClosedForm::evaluate`](crate::duhamel_closed_form::DuhamelClosedForm::evaluate)
+//! only the full sum or the exact recursion [`crate::recursion`] is right). The result
+//! equals [`DuhamelClosedForm::evaluate`](crate::closed_form::duhamel::DuhamelClosedForm::evaluate)
 //! with `max_terms = K` (same terms, same compensated summation).
 
-use crate::duhamel_closed_form::TERM_TOLERANCE;
+use crate::closed_form::duhamel::TERM_TOLERANCE;
 use crate::error::{Error, Param};
-use crate::free_vibration::Kernel;
+use crate::closed_form::free_vibration::Kernel;
 use crate::math::Libm;
 use crate::structure::Structure;
 use heapless::Deque;
@@ -163,7 +163,7 @@ impl<const K: usize> TruncatedClosedForm<K> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::duhamel_closed_form::{DuhamelClosedForm, Reversal, ReversalTrain};
+    use crate::closed_form::duhamel::{DuhamelClosedForm, Reversal, ReversalTrain};
     use crate::structure::StructureParams;
     use std::vec::Vec;
 

@@ -29,9 +29,9 @@
 //! All three damping regimes use the same code (the kernel is continuous across Mξ² = 1), and
 //! every coefficient is finite for m2/m1 → 0.
 
-use crate::duhamel_closed_form::ReversalTrain;
+use crate::closed_form::duhamel::ReversalTrain;
 use crate::error::{check, Error, Param};
-use crate::free_vibration::Kernel;
+use crate::closed_form::free_vibration::Kernel;
 use crate::math::{Libm, Real, Transcendentals};
 use crate::structure::Structure;
 use core::marker::PhantomData;

@@ -10,7 +10,7 @@
 //! below 1e-20 (relative to gμ): an undamped structure keeps all terms.
 
 use crate::error::{Error, Param};
-use crate::free_vibration::Kernel;
+use crate::closed_form::free_vibration::Kernel;
 use crate::math::Libm;
 use crate::structure::Structure;
 
