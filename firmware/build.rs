@@ -134,8 +134,8 @@ const DEFAULT_ACCEL_NOISE_RMS_M_S2: f64 = 5e-3;
 /// model times sticks and slip starts from the slip acceleration (base − table accelerometer),
 /// the others use the reversal detector on the displacement.
 enum DetectorChoice {
-    Displacement(ssvr_core::reversal_detector::DetectorConfig),
-    Acceleration(ssvr_core::phase_detector::PhaseDetectorConfig),
+    Displacement(ssvr_core::detect::displacement::DetectorConfig),
+    Acceleration(ssvr_core::detect::acceleration::PhaseDetectorConfig),
 }
 
 /// The parsed scene. The lookup is lenient about layout: every key is searched for anywhere in
@@ -266,7 +266,7 @@ impl Scene {
         let accel_noise = sensor("accel_noise_rms_m_s2", DEFAULT_ACCEL_NOISE_RMS_M_S2);
         // The same settings as host-sim's detector for this scene and model.
         let (detector, ring, max_age) = if model == "stick-slip" {
-            let d = ssvr_core::phase_detector::PhaseDetectorConfig::for_noise(accel_noise)
+            let d = ssvr_core::detect::acceleration::PhaseDetectorConfig::for_noise(accel_noise)
                 .unwrap_or_else(|e| {
                     panic!(
                         "scene {}: no phase detector for accel_noise_rms_m_s2 = {accel_noise}: {e:?}",
@@ -280,7 +280,7 @@ impl Scene {
                 d.max_age_samples(),
             )
         } else {
-            let d = ssvr_core::reversal_detector::DetectorConfig::for_noise(disp_noise, rate)
+            let d = ssvr_core::detect::displacement::DetectorConfig::for_noise(disp_noise, rate)
                 .unwrap_or_else(|e| {
                     panic!(
                         "scene {}: no reversal detector for disp_noise_rms_m = {disp_noise} at \
@@ -323,14 +323,14 @@ impl Scene {
         let (debug, module, config, ty, input) = match &self.detector {
             DetectorChoice::Displacement(d) => (
                 format!("{d:?}"),
-                "reversal_detector",
+                "detect::displacement",
                 "DetectorConfig",
                 "ReversalDetector",
                 "the base-to-table displacement (m)",
             ),
             DetectorChoice::Acceleration(d) => (
                 format!("{d:?}"),
-                "phase_detector",
+                "detect::acceleration",
                 "PhaseDetectorConfig",
                 "PhaseDetector",
                 "the slip acceleration, base minus table accelerometer (m/s²)",

@@ -14,8 +14,9 @@
 //!   * [`closed_form::truncated`]: eq (36) truncated to the K newest reversals (O(K) per sample;
 //!     a baseline).
 //! * [`recursion`]: eq (36) as an exact O(1)-per-sample recursion (the estimator).
-//! * [`reversal_detector`] and [`phase_detector`]: friction reversals, sticks and slip starts sensed
-//!   from the slip displacement, or from the slip acceleration (base minus table accelerometer).
+//! * [`detect`]: friction reversals, sticks and slip starts sensed from the slip displacement
+//!   ([`detect::displacement`]), or from the slip acceleration (base minus table accelerometer,
+//!   [`detect::acceleration`]).
 //! * [`stick_slip_estimator`]: the stick-slip aware estimator with online friction identification.
 //!
 //! The library is `#![no_std]`, allocates nothing and never panics on any input: every fallible
@@ -31,11 +32,10 @@
 extern crate std;
 
 pub mod closed_form;
+pub mod detect;
 pub mod error;
 pub mod math;
-pub mod phase_detector;
 pub mod recursion;
-pub mod reversal_detector;
 pub mod stick_slip_estimator;
 pub mod structure;
 

@@ -17,8 +17,8 @@ use crate::sensors::{SensorFrame, FLAG_ACCEL_SATURATED};
 use crate::truth::{EventKind, Truth};
 use ssvr_core::recursion::Estimator32;
 use ssvr_core::math::F32Poly;
-use ssvr_core::phase_detector::{PhaseDetector, PhaseDetectorConfig};
-use ssvr_core::reversal_detector::{DetectorConfig, ReversalDetector, SlipEvent};
+use ssvr_core::detect::acceleration::{PhaseDetector, PhaseDetectorConfig};
+use ssvr_core::detect::displacement::{DetectorConfig, ReversalDetector, SlipEvent};
 use ssvr_core::stick_slip_estimator::{MuEstimate, StickSlipConfig, StickSlipEstimator};
 use ssvr_core::{Error, Structure};
 

@@ -43,7 +43,7 @@ use crate::truth::{simulate, EventKind, Phase, TruthInput};
 use anyhow::{anyhow, bail, Context, Result};
 use serde::Serialize;
 use ssvr_core::recursion::Estimator32;
-use ssvr_core::reversal_detector::SlipEvent;
+use ssvr_core::detect::displacement::SlipEvent;
 use std::fmt;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};

@@ -227,8 +227,8 @@ fn run_detector_sticks(t: &mut Ticks, det: &Detector) {
         let ticks = t.time(|| {
             for i in rise..rise + STAIR_SAMPLES {
                 match black_box(&mut d).process(stair_signal(i, period, rise)) {
-                    Some(ssvr_core::reversal_detector::SlipEvent::Stick { .. }) => sticks += 1,
-                    Some(ssvr_core::reversal_detector::SlipEvent::SlipStart { .. }) => starts += 1,
+                    Some(ssvr_core::detect::displacement::SlipEvent::Stick { .. }) => sticks += 1,
+                    Some(ssvr_core::detect::displacement::SlipEvent::SlipStart { .. }) => starts += 1,
                     _ => {}
                 }
             }

@@ -18,8 +18,8 @@
 //!    if the sample is missing, the displacement is not finite, flagged saturated upstream, or at
 //!    or beyond the compiled-in full scale `scene::DISP_RANGE_M`;
 //! 2. the model's detector processes its input, or NaN when that is unusable (the detector then
-//!    repeats its last value and keeps time): the reversal detector (`ssvr_core::reversal_detector`)
-//!    the displacement (rectangular, fixed-base), the phase detector (`ssvr_core::phase_detector`)
+//!    repeats its last value and keeps time): the reversal detector (`ssvr_core::detect::displacement`)
+//!    the displacement (rectangular, fixed-base), the phase detector (`ssvr_core::detect::acceleration`)
 //!    the slip acceleration, base minus table accelerometer (stick-slip; unusable when the sample
 //!    is missing, not finite or saturated);
 //! 3. the event goes to the estimator of the compiled-in model ([`super::model::push`]):
@@ -35,7 +35,7 @@
 use super::model::{self, Estimator, Pushed};
 use super::scene::{self, Detector};
 use heapless::spsc::{Consumer, Producer};
-use ssvr_core::reversal_detector::SlipEvent;
+use ssvr_core::detect::displacement::SlipEvent;
 
 /// Number of measured channels: table accel, base accel, top accel (m/s²), base-to-table
 /// displacement (m).

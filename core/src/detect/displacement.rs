@@ -16,52 +16,12 @@
 //! samples, which the estimator back-dates. Fixed-size ring buffer of `N` samples; no heap, no
 //! panics.
 
+use super::ring::{rel, slot};
+use super::search::{golden_min, grid_min};
 use crate::error::{check, Error, Param};
 
-/// A detected change of sliding.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum SlipEvent {
-    /// The base started to slide from rest in `direction` (+1 or −1).
-    SlipStart {
-        /// Slip direction.
-        direction: i8,
-        /// Samples between the event and the current sample (≥ 0).
-        age_samples: f32,
-    },
-    /// The sliding direction reversed; the base now slides in `direction`.
-    Reversal {
-        /// New slip direction.
-        direction: i8,
-        /// Samples between the event and the current sample (≥ 0).
-        age_samples: f32,
-    },
-    /// The base stopped and sticks.
-    Stick {
-        /// Samples between the event and the current sample (≥ 0).
-        age_samples: f32,
-    },
-}
-
-impl SlipEvent {
-    /// The friction level after the event in units of F0 (friction opposes slip; 0 while stuck).
-    pub fn friction_level(&self) -> f32 {
-        match *self {
-            SlipEvent::SlipStart { direction, .. } | SlipEvent::Reversal { direction, .. } => {
-                -(direction as f32)
-            }
-            SlipEvent::Stick { .. } => 0.0,
-        }
-    }
-
-    /// Age of the event in samples.
-    pub fn age_samples(&self) -> f32 {
-        match *self {
-            SlipEvent::SlipStart { age_samples, .. }
-            | SlipEvent::Reversal { age_samples, .. }
-            | SlipEvent::Stick { age_samples } => age_samples,
-        }
-    }
-}
+/// The events this detector reports (defined in [`crate::detect`]).
+pub use super::SlipEvent;
 
 /// Detector settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -535,54 +495,6 @@ impl<const N: usize> ReversalDetector<N> {
         }
         let ts = golden_min(&resid, (best - 3.0, best + 3.0), 16);
         (ts, resid(ts))
-    }
-}
-
-/// The best of f on the grid a, a + step, … ≤ b: (t, f(t)).
-pub(crate) fn grid_min(f: &impl Fn(f32) -> f32, (a, b): (f32, f32), step: f32) -> (f32, f32) {
-    let (mut best, mut best_r) = (a, f32::INFINITY);
-    let mut t = a;
-    while t <= b {
-        let r = f(t);
-        if r < best_r {
-            best_r = r;
-            best = t;
-        }
-        t += step;
-    }
-    (best, best_r)
-}
-
-/// Golden-section search for the minimum of f on [lo, hi] (`iters` steps): the midpoint of the
-/// final bracket.
-pub(crate) fn golden_min(f: &impl Fn(f32) -> f32, (mut lo, mut hi): (f32, f32), iters: u32) -> f32 {
-    let gr = 0.618_034f32;
-    for _ in 0..iters {
-        let (m1, m2) = (hi - gr * (hi - lo), lo + gr * (hi - lo));
-        if f(m1) < f(m2) {
-            hi = m2;
-        } else {
-            lo = m1;
-        }
-    }
-    0.5 * (lo + hi)
-}
-
-/// Time of sample i ≤ k relative to sample k (≤ 0), exact in f32 for any run length (the window
-/// is at most the ring long; absolute sample indices would lose sub-sample resolution in f32).
-#[inline(always)]
-pub(crate) fn rel(i: u64, k: u64) -> f32 {
-    -(k.saturating_sub(i) as u32 as f32)
-}
-
-/// Ring slot of sample i: a mask for power-of-two rings (a 64-bit modulo is a library call on
-/// the Cortex-M4F).
-#[inline(always)]
-pub(crate) fn slot<const N: usize>(i: u64) -> usize {
-    if N.is_power_of_two() {
-        (i as usize) & (N - 1)
-    } else {
-        (i % N as u64) as usize
     }
 }
 

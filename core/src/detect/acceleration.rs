@@ -25,12 +25,14 @@
 //! input never panics: the velocity is then held at zero and events are timed mid-interval. Fixed-size ring of `N` samples; no
 //! heap, no panics.
 //!
-//! Compared with the displacement detector ([`crate::reversal_detector`]), which must wait for the
+//! Compared with the displacement detector ([`crate::detect::displacement`]), which must wait for the
 //! slip to move by several times the displacement noise (a slow breakaway stays below 1 µm for
 //! milliseconds), this one needs accelerometers on the base and the table.
 
 use crate::error::{check, Error, Param};
-use crate::reversal_detector::{golden_min, grid_min, rel, slot, SlipEvent};
+use super::ring::{rel, slot};
+use super::search::{golden_min, grid_min};
+use super::SlipEvent;
 
 /// A jump of s̈ (against its linear extrapolation) larger than this many thresholds is a change
 /// of the friction force.
