@@ -107,17 +107,17 @@ const MODELS: [&str; 3] = ["fixed-base", "rectangular", "stick-slip"];
 /// The stick-slip estimator's settings in the firmware (host-sim's `model::STICK_SLIP_CONFIG`,
 /// `for_rate` of the scene's rate, which `host-sim qemu` checks against the firmware's `model`
 /// message): μ identified and adopted at the start of each sliding episode.
-const STICK_SLIP: ssvr_core::stick_slip_estimator::StickSlipConfig =
-    ssvr_core::stick_slip_estimator::StickSlipConfig {
+const STICK_SLIP: ssvr_core::stick_slip::StickSlipConfig =
+    ssvr_core::stick_slip::StickSlipConfig {
         use_identified_mu: true,
-        ..ssvr_core::stick_slip_estimator::StickSlipConfig::DEFAULT
+        ..ssvr_core::stick_slip::StickSlipConfig::DEFAULT
     };
 
 /// The fixed-base model's settings (host-sim's `model::FIXED_BASE_CONFIG`): no identification
 /// (the estimator never leaves its stuck phase, so identifying μ would change nothing but cost
 /// instructions on every sample).
-const FIXED_BASE: ssvr_core::stick_slip_estimator::StickSlipConfig =
-    ssvr_core::stick_slip_estimator::StickSlipConfig {
+const FIXED_BASE: ssvr_core::stick_slip::StickSlipConfig =
+    ssvr_core::stick_slip::StickSlipConfig {
         identify_mu: false,
         observer_bandwidth: 0.0,
         ..STICK_SLIP
@@ -386,7 +386,7 @@ impl Scene {
 
     /// Consts of the estimator model: its name, the stick-slip settings and history.
     fn model_consts(&self, model: &str) -> String {
-        use ssvr_core::stick_slip_estimator::{
+        use ssvr_core::stick_slip::{
             history_for_age, StickSlipCoefficients, StickSlipEstimator,
         };
         let max_age = self.max_age;
@@ -439,8 +439,8 @@ impl Scene {
             "/// The estimator model (`SSVR_MODEL`).\n\
              pub const MODEL: &str = {model:?};\n\
              /// The stick-slip estimator's settings (stick-slip model; fixed-base: no identification).\n\
-             pub const STICK_SLIP: ssvr_core::stick_slip_estimator::StickSlipConfig =\n\
-             \x20   ssvr_core::stick_slip_estimator::{debug};\n\
+             pub const STICK_SLIP: ssvr_core::stick_slip::StickSlipConfig =\n\
+             \x20   ssvr_core::stick_slip::{debug};\n\
              /// `STICK_SLIP` in its `Debug` form (reported in the `model` message).\n\
              pub const STICK_SLIP_DEBUG: &str = {debug:?};\n\
              /// The detector's longest back-dating (samples).\n\

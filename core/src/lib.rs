@@ -17,7 +17,7 @@
 //! * [`detect`]: friction reversals, sticks and slip starts sensed from the slip displacement
 //!   ([`detect::displacement`]), or from the slip acceleration (base minus table accelerometer,
 //!   [`detect::acceleration`]).
-//! * [`stick_slip_estimator`]: the stick-slip aware estimator with online friction identification.
+//! * [`stick_slip`]: the stick-slip aware estimator with online friction identification.
 //!
 //! The library is `#![no_std]`, allocates nothing and never panics on any input: every fallible
 //! operation returns a typed [`Error`].
@@ -36,7 +36,7 @@ pub mod detect;
 pub mod error;
 pub mod math;
 pub mod recursion;
-pub mod stick_slip_estimator;
+pub mod stick_slip;
 pub mod structure;
 
 pub use closed_form::duhamel::{Reversal, ReversalTrain};

@@ -30,8 +30,8 @@
 //! every coefficient is finite for m2/m1 → 0.
 
 use crate::closed_form::duhamel::ReversalTrain;
-use crate::error::{check, Error, Param};
 use crate::closed_form::free_vibration::Kernel;
+use crate::error::{check, Error, Param};
 use crate::math::{Libm, Real, Transcendentals};
 use crate::structure::Structure;
 use core::marker::PhantomData;

@@ -5,9 +5,9 @@ use crate::scene::{Input, Scene};
 use anyhow::{anyhow, bail, Context, Result};
 use serde::Serialize;
 use ssvr_core::closed_form::duhamel::DuhamelClosedForm;
-use ssvr_core::recursion::DuhamelRecursion;
 use ssvr_core::closed_form::fourier::{FourierResponse, Tfm};
 use ssvr_core::math::{Libm, Real, Transcendentals};
+use ssvr_core::recursion::DuhamelRecursion;
 use ssvr_core::{ReversalTrain, Structure};
 use std::io::Write;
 

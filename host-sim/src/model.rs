@@ -15,11 +15,11 @@
 
 use crate::sensors::{SensorFrame, FLAG_ACCEL_SATURATED};
 use crate::truth::{EventKind, Truth};
-use ssvr_core::recursion::Estimator32;
-use ssvr_core::math::F32Poly;
 use ssvr_core::detect::acceleration::{PhaseDetector, PhaseDetectorConfig};
 use ssvr_core::detect::displacement::{DetectorConfig, ReversalDetector, SlipEvent};
-use ssvr_core::stick_slip_estimator::{MuEstimate, StickSlipConfig, StickSlipEstimator};
+use ssvr_core::math::F32Poly;
+use ssvr_core::recursion::Estimator32;
+use ssvr_core::stick_slip::{MuEstimate, StickSlipConfig, StickSlipEstimator};
 use ssvr_core::{Error, Structure};
 
 /// History of the stick-slip estimator on the host (samples): the longest back-dating.

@@ -9,8 +9,8 @@
 //! (compensated summation) and the sum stops once the bound e^{−r1 τ}(1 + aτ) of every older term is
 //! below 1e-20 (relative to gμ): an undamped structure keeps all terms.
 
-use crate::error::{Error, Param};
 use crate::closed_form::free_vibration::Kernel;
+use crate::error::{Error, Param};
 use crate::math::Libm;
 use crate::structure::Structure;
 

@@ -16,8 +16,8 @@
 //! with `max_terms = K` (same terms, same compensated summation).
 
 use crate::closed_form::duhamel::TERM_TOLERANCE;
-use crate::error::{Error, Param};
 use crate::closed_form::free_vibration::Kernel;
+use crate::error::{Error, Param};
 use crate::math::Libm;
 use crate::structure::Structure;
 use heapless::Deque;

@@ -29,10 +29,10 @@
 //! slip to move by several times the displacement noise (a slow breakaway stays below 1 µm for
 //! milliseconds), this one needs accelerometers on the base and the table.
 
-use crate::error::{check, Error, Param};
 use super::ring::{rel, slot};
 use super::search::{golden_min, grid_min};
 use super::SlipEvent;
+use crate::error::{check, Error, Param};
 
 /// A jump of s̈ (against its linear extrapolation) larger than this many thresholds is a change
 /// of the friction force.

@@ -521,7 +521,7 @@ fn estimator_blocks(t: &mut Ticks, est: Estimator) -> (u32, u32, u32, u32) {
     });
     // The prediction alone: the same estimator without the identification.
     let mut bare =
-        match super::model::with_config(ssvr_core::stick_slip_estimator::StickSlipConfig {
+        match super::model::with_config(ssvr_core::stick_slip::StickSlipConfig {
             identify_mu: false,
             ..super::scene::STICK_SLIP
         }) {

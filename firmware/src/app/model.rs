@@ -28,11 +28,11 @@ pub type Estimator = ssvr_core::recursion::Estimator32;
 /// The estimator of the model: a history of `scene::HISTORY` samples in the storage that makes
 /// its steady state cheapest (`storage_for`: a multiple of the identification block plus one).
 #[cfg(not(ssvr_model = "rectangular"))]
-pub type Estimator = ssvr_core::stick_slip_estimator::StickSlipEstimator<
+pub type Estimator = ssvr_core::stick_slip::StickSlipEstimator<
     f32,
     ssvr_core::math::F32Poly,
     {
-        ssvr_core::stick_slip_estimator::storage_for(
+        ssvr_core::stick_slip::storage_for(
             scene::HISTORY,
             scene::STICK_SLIP.identify_every,
         )
@@ -69,9 +69,9 @@ pub fn new() -> Result<Estimator, Error> {
 /// prediction-only run).
 #[cfg(not(ssvr_model = "rectangular"))]
 pub fn with_config(
-    cfg: ssvr_core::stick_slip_estimator::StickSlipConfig,
+    cfg: ssvr_core::stick_slip::StickSlipConfig,
 ) -> Result<Estimator, Error> {
-    let c = ssvr_core::stick_slip_estimator::StickSlipCoefficients::from_bits(
+    let c = ssvr_core::stick_slip::StickSlipCoefficients::from_bits(
         &scene::STICK_SLIP_COEFFICIENTS,
     )
     .ok_or(Error::NotFinite(ssvr_core::Param::SampleRate))?;
