@@ -83,7 +83,7 @@ impl<'a> ReversalTrain<'a> {
             ReversalTrain::Explicit(rs) => {
                 for r in rs {
                     crate::error::check(
-                        Param::ReversalSign,
+                        Param::ReversalLevel,
                         r.level,
                         (-1.0..=1.0).contains(&r.level),
                         "a level in [-1, 1]",

@@ -71,11 +71,11 @@ impl<const K: usize> TruncatedClosedForm<K> {
             return Err(Error::NotIncreasing { index: self.pushed });
         }
         if !level.is_finite() {
-            return Err(Error::NotFinite(Param::ReversalSign));
+            return Err(Error::NotFinite(Param::ReversalLevel));
         }
         if !(-1.0..=1.0).contains(&level) {
             return Err(Error::OutOfRange {
-                param: Param::ReversalSign,
+                param: Param::ReversalLevel,
                 value: level,
                 expected: "a level in [-1, 1]",
             });
@@ -282,7 +282,7 @@ mod tests {
         );
         assert_eq!(
             tc.push_reversal(0.2, 1.5).unwrap_err().param(),
-            Param::ReversalSign
+            Param::ReversalLevel
         );
         assert_eq!(tc.pushed(), 1);
         assert_eq!(tc.level(), 1.0);

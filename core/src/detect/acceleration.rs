@@ -71,7 +71,7 @@ impl PhaseDetectorConfig {
     /// searched up to 32 samples before the first one above the threshold.
     pub fn for_noise(accel_noise_rms_m_s2: f64) -> Result<Self, Error> {
         check(
-            Param::EventTime,
+            Param::NoiseRms,
             accel_noise_rms_m_s2,
             accel_noise_rms_m_s2 >= 0.0,
             ">= 0 m/s²",
@@ -136,16 +136,30 @@ impl<const N: usize> PhaseDetector<N> {
     /// A detector that starts stuck.
     pub fn new(cfg: PhaseDetectorConfig) -> Result<Self, Error> {
         check(
-            Param::EventTime,
+            Param::Threshold,
             cfg.threshold_m_s2 as f64,
             cfg.threshold_m_s2 > 0.0,
             "threshold > 0 m/s²",
         )?;
-        if cfg.confirm_samples < 2 || cfg.stall_samples < 2 || cfg.min_ring() > N {
+        if cfg.confirm_samples < 2 {
             return Err(Error::OutOfRange {
-                param: Param::EventTime,
+                param: Param::ConfirmSamples,
                 value: cfg.confirm_samples as f64,
-                expected: "confirm_samples >= 2, stall_samples >= 2, search + confirm samples + 2 <= buffer length",
+                expected: "confirm_samples >= 2",
+            });
+        }
+        if cfg.stall_samples < 2 {
+            return Err(Error::OutOfRange {
+                param: Param::StallSamples,
+                value: cfg.stall_samples as f64,
+                expected: "stall_samples >= 2",
+            });
+        }
+        if cfg.min_ring() > N {
+            return Err(Error::OutOfRange {
+                param: Param::RingLength,
+                value: N as f64,
+                expected: "a ring of at least search + confirm samples + 2 (a power of two)",
             });
         }
         Ok(Self {

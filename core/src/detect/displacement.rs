@@ -48,7 +48,7 @@ impl DetectorConfig {
             sample_rate_hz > 0.0,
             "> 0 Hz",
         )?;
-        check(Param::EventTime, noise_rms_m, noise_rms_m >= 0.0, ">= 0 m")?;
+        check(Param::NoiseRms, noise_rms_m, noise_rms_m >= 0.0, ">= 0 m")?;
         let fit = libm::round(2e-3 * sample_rate_hz).clamp(2.0, 64.0) as usize;
         let stick = libm::round(10e-3 * sample_rate_hz).clamp(3.0, 1e6) as usize;
         Ok(Self {
@@ -123,16 +123,23 @@ impl<const N: usize> ReversalDetector<N> {
     /// A detector that starts stuck at the first sample's value.
     pub fn new(cfg: DetectorConfig) -> Result<Self, Error> {
         check(
-            Param::EventTime,
+            Param::Hysteresis,
             cfg.hysteresis_m as f64,
             cfg.hysteresis_m > 0.0,
             "hysteresis > 0 m",
         )?;
-        if cfg.fit_half < 2 || 2 * cfg.fit_half + 2 > N || cfg.stick_samples == 0 {
+        if cfg.fit_half < 2 || 2 * cfg.fit_half + 2 > N {
             return Err(Error::OutOfRange {
-                param: Param::EventTime,
+                param: Param::FitHalf,
                 value: cfg.fit_half as f64,
-                expected: "2 <= fit_half, 2*fit_half + 2 <= buffer length, stick_samples >= 1",
+                expected: "2 <= fit_half, 2*fit_half + 2 <= buffer length",
+            });
+        }
+        if cfg.stick_samples == 0 {
+            return Err(Error::OutOfRange {
+                param: Param::StickSamples,
+                value: cfg.stick_samples as f64,
+                expected: "stick_samples >= 1",
             });
         }
         Ok(Self {

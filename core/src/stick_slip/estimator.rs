@@ -136,27 +136,27 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
         history: usize,
     ) -> Result<Self, Error> {
         crate::error::check(
-            Param::EventTime,
+            Param::Forgetting,
             cfg.forgetting,
             cfg.forgetting > 0.0 && cfg.forgetting <= 1.0,
             "forgetting factor in (0, 1]",
         )?;
         if cfg.identify_every == 0 || cfg.identify_every > MAX_IDENTIFY_EVERY {
             return Err(Error::OutOfRange {
-                param: Param::EventTime,
+                param: Param::IdentifyEvery,
                 value: cfg.identify_every as f64,
                 expected: "identify_every in 1 ..= MAX_IDENTIFY_EVERY samples",
             });
         }
         if history < 2 || history > H {
             return Err(Error::OutOfRange {
-                param: Param::EventTime,
+                param: Param::History,
                 value: history as f64,
                 expected: "a history of at least 2 samples, at most the storage H",
             });
         }
         crate::error::check(
-            Param::EventTime,
+            Param::ObserverBandwidth,
             cfg.observer_bandwidth,
             cfg.observer_bandwidth >= 0.0 && cfg.observer_bandwidth <= 10.0,
             "observer bandwidth in [0, 10] × p",

@@ -32,7 +32,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
     pub fn push_event(&mut self, phase: Phase, age_samples: T) -> Result<(), Error> {
         if !(-1..=1).contains(&phase) {
             return Err(Error::OutOfRange {
-                param: Param::ReversalSign,
+                param: Param::Phase,
                 value: phase as f64,
                 expected: "a phase of -1, 0 or 1",
             });
