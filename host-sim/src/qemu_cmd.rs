@@ -925,7 +925,7 @@ pub fn run_scene_model(
         }
     }
     let fw_mu = firmware_mu(&frames);
-    let host_mu = host.mu.map(|m| (m.mu, m.std, m.samples));
+    let host_mu = host.mu.map(|m| (m.mu, m.std, m.blocks));
     let mu_equal = fw_mu == host_mu;
 
     // (b) The full-precision reference on the detected events; (c) the truth.

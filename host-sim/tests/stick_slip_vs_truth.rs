@@ -209,7 +209,7 @@ fn identify(truth_mu: f64, model_mu: f64, table: &TableMotion, duration: f64) ->
         est.update(f.table_accel_m_s2, f.top_accel_m_s2);
     }
     let m = est.mu_estimate().unwrap();
-    (m.mu, m.std, m.samples)
+    (m.mu, m.std, m.blocks)
 }
 
 #[test]

@@ -9,14 +9,15 @@ pub struct StickSlipConfig {
     /// Identify μ online.
     pub identify_mu: bool,
     /// Let the model adopt the identified μ (at the start of each sliding episode, once
-    /// `min_samples` updates are in and μ̂ is within a factor of 2 of the structure's μ). A late
-    /// event re-simulates the history with the μ in use now, also for intervals before an
-    /// adoption within the history.
+    /// `min_blocks` identification blocks are in and μ̂ is within a factor of 2 of the
+    /// structure's μ). A late event re-simulates the history with the μ in use now, also for
+    /// intervals before an adoption within the history.
     pub use_identified_mu: bool,
     /// RLS forgetting factor λ in (0, 1] per sample (λ^n per update of a block of n samples).
     pub forgetting: f64,
-    /// RLS updates (samples used) before μ̂ is adopted.
-    pub min_samples: u32,
+    /// Identification blocks used (RLS updates, one per block of `identify_every` samples)
+    /// before μ̂ is adopted.
+    pub min_blocks: u32,
     /// Identify on blocks of this many samples (1 ..= [`MAX_IDENTIFY_EVERY`]): one RLS update
     /// per block, from its last sample; the cost of the identification is spread over the block.
     pub identify_every: u32,
@@ -38,7 +39,7 @@ impl StickSlipConfig {
         identify_mu: true,
         use_identified_mu: false,
         forgetting: 0.9999,
-        min_samples: 64,
+        min_blocks: 64,
         identify_every: 32,
         observer_bandwidth: 2.0,
     };
@@ -47,7 +48,7 @@ impl StickSlipConfig {
 impl StickSlipConfig {
     /// These settings with identification blocks of ~3.2 ms at `sample_rate_hz` (32 samples at
     /// 10 kHz, 3 at 1 kHz: a block must fit in the sliding stretches between events, which last
-    /// a few ms to tens of ms) and `min_samples` updates covering 2048 samples.
+    /// a few ms to tens of ms) and `min_blocks` blocks covering 2048 samples.
     pub fn for_rate(self, sample_rate_hz: f64) -> Self {
         let blocks = libm::floor(sample_rate_hz * 3.2e-3);
         // (A non-finite or non-positive rate: blocks of 1; the constructor rejects the rate.)
@@ -58,7 +59,7 @@ impl StickSlipConfig {
         };
         Self {
             identify_every: n,
-            min_samples: 2048u32.div_ceil(n),
+            min_blocks: 2048u32.div_ceil(n),
             ..self
         }
     }

@@ -283,7 +283,8 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
         self.mu_use.to_f64()
     }
 
-    /// The identified μ, with its standard deviation (None before any sliding sample was used).
+    /// The identified μ, with its standard deviation (None before any identification block was
+    /// used).
     pub fn mu_estimate(&self) -> Option<MuEstimate> {
         let r = &self.id.rls;
         (r.n > 0).then(|| {
@@ -291,7 +292,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
             MuEstimate {
                 mu: r.mu.to_f64(),
                 std: libm::sqrt(var.max(0.0)),
-                samples: r.n,
+                blocks: r.n,
             }
         })
     }

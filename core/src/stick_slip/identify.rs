@@ -242,7 +242,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
         let mu_hat = self.id.rls.mu;
         let plausible =
             mu_hat >= self.c.mu * T::from_f64(0.5) && mu_hat <= self.c.mu * T::from_f64(2.0);
-        if self.cfg.use_identified_mu && self.id.rls.n >= self.cfg.min_samples && plausible {
+        if self.cfg.use_identified_mu && self.id.rls.n >= self.cfg.min_blocks && plausible {
             self.mu_use = mu_hat;
             self.gmu = self.c.g * self.mu_use;
             if self.mode == MODE_SLIDE {

@@ -9,8 +9,9 @@ pub struct MuEstimate {
     pub mu: f64,
     /// Standard deviation of μ̂.
     pub std: f64,
-    /// Samples used (RLS updates: one per identification block).
-    pub samples: u32,
+    /// Identification blocks used (RLS updates: one per block of
+    /// [`StickSlipConfig::identify_every`](super::StickSlipConfig::identify_every) samples).
+    pub blocks: u32,
 }
 
 #[derive(Debug, Clone, Copy)]

@@ -90,7 +90,7 @@ fn the_history_length_not_the_storage_decides() {
     let s = structure(0.2, 0.05);
     let cfg = StickSlipConfig {
         use_identified_mu: true,
-        min_samples: 100,
+        min_blocks: 100,
         ..StickSlipConfig::DEFAULT
     };
     let mut a = StickSlipEstimator::<f32, F32Poly, 144>::new(&s, 1e4, cfg).unwrap();
@@ -98,7 +98,7 @@ fn the_history_length_not_the_storage_decides() {
     assert_eq!(b.history(), 144);
     assert_eq!(drive(&mut a, 5000), drive(&mut b, 5000));
     let (ma, mb) = (a.mu_estimate().unwrap(), b.mu_estimate().unwrap());
-    assert_eq!((ma.mu, ma.std, ma.samples), (mb.mu, mb.std, mb.samples));
+    assert_eq!((ma.mu, ma.std, ma.blocks), (mb.mu, mb.std, mb.blocks));
     for d in 0..150 {
         assert_eq!(
             a.prediction_at(4999 - d).map(f32::to_bits),
@@ -307,7 +307,7 @@ fn check_identification<const H: usize>(
     let cfg = StickSlipConfig {
         identify_every: every,
         use_identified_mu: true,
-        min_samples: 20,
+        min_blocks: 20,
         ..StickSlipConfig::DEFAULT
     };
     let mut truth =
@@ -348,7 +348,7 @@ fn check_identification<const H: usize>(
     let m = est.mu_estimate().unwrap();
     let (mu, a, _, e2, n) = r.rls;
     let at = (H, history, every);
-    assert_eq!(m.samples, n, "{at:?}");
+    assert_eq!(m.blocks, n, "{at:?}");
     assert!(n > 100, "{at:?}: {n}");
     assert!((m.mu - mu).abs() < 1e-9 * mu.abs(), "{at:?}: {m:?} {mu}");
     let std = (e2 / a).sqrt();
@@ -508,7 +508,7 @@ fn block_vs_samples<const H: usize>(cfg: StickSlipConfig, history: usize, n: u64
 fn blocks_give_the_per_sample_predictions_bit_for_bit() {
     let cfg = StickSlipConfig {
         use_identified_mu: true,
-        min_samples: 50,
+        min_blocks: 50,
         ..StickSlipConfig::DEFAULT
     };
     // The firmware's layout (storage = a multiple of the block plus one) and a plain one.

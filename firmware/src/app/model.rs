@@ -229,7 +229,7 @@ pub fn mu_estimate(est: &Estimator) -> Option<(f64, f64, u32)> {
     }
     #[cfg(not(ssvr_model = "rectangular"))]
     {
-        est.mu_estimate().map(|m| (m.mu, m.std, m.samples))
+        est.mu_estimate().map(|m| (m.mu, m.std, m.blocks))
     }
 }
 
