@@ -6,7 +6,7 @@ use super::identify::{Ident, Pending};
 use super::maps::{power, powi, StuckMap};
 use super::observer::observer_gain;
 use super::packed::{self, MAX_SWITCHES};
-use super::phase::Phase;
+use super::phase::{Level, SlidingPhase};
 use super::rls::{MuEstimate, Rls};
 use crate::error::{Error, Param};
 use crate::math::{Real, Transcendentals};
@@ -58,7 +58,7 @@ pub struct StickSlipEstimator<T: Real, M: Transcendentals<T>, const H: usize> {
     /// [`MODE_SLIDE`], [`MODE_STUCK`] or [`MODE_COLD`]: how to step interval k − 1 → k.
     pub(super) mode: u8,
     /// The current phase (of interval k − 1 → k on, once a pending change is applied).
-    pub(super) phase: Phase,
+    pub(super) phase: Level,
     /// The slow path ([`Self::at_mark`]) runs after storing the sample of slot `mark − 1`
     /// (≤ `H`: the ring's wrap).
     pub(super) mark: usize,
@@ -273,9 +273,13 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
         &self.cfg
     }
 
-    /// The current phase (0 stuck, ±1 friction level while sliding).
-    pub fn phase(&self) -> Phase {
-        self.phase
+    /// The current phase.
+    pub fn phase(&self) -> SlidingPhase {
+        match self.phase {
+            ..0 => SlidingPhase::Negative,
+            0 => SlidingPhase::Stuck,
+            _ => SlidingPhase::Positive,
+        }
     }
 
     /// The μ the model uses now.

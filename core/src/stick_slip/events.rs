@@ -3,7 +3,6 @@
 
 use super::estimator::{StickSlipEstimator, MODE_COLD};
 use super::packed;
-use super::phase::Phase;
 use crate::error::{Error, Param};
 use crate::math::{Real, Transcendentals};
 
@@ -25,11 +24,13 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
         }
     }
 
-    /// A phase change detected late: the base entered `phase` (0 stuck, ±1 friction level)
-    /// `age_samples` ≥ 0 sample intervals before the sample the next [`Self::update`] returns.
+    /// A phase change detected late: the base entered the phase of friction level `phase`
+    /// ([`SlidingPhase::level`](super::SlidingPhase::level): 0 stuck, ±1 sliding; any other
+    /// level is an error) `age_samples` ≥ 0 sample intervals before the sample the next
+    /// [`Self::update`] returns.
     /// Push events in chronological order. Events older than the history (`history − 2`
     /// samples; older ones may be accepted when they fall on a sample) are an error.
-    pub fn push_event(&mut self, phase: Phase, age_samples: T) -> Result<(), Error> {
+    pub fn push_event(&mut self, phase: i8, age_samples: T) -> Result<(), Error> {
         if !(-1..=1).contains(&phase) {
             return Err(Error::OutOfRange {
                 param: Param::Phase,

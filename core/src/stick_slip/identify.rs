@@ -5,7 +5,7 @@
 use super::estimator::{StickSlipEstimator, MODE_SLIDE};
 use super::maps::mat;
 use super::packed;
-use super::phase::Phase;
+use super::phase::Level;
 use super::rls::Rls;
 use crate::math::{Real, Transcendentals};
 
@@ -20,15 +20,15 @@ pub(super) struct Pending {
     /// The intervals that slide in phase −1.
     pub(super) neg: u32,
     /// The phase at the end of the block.
-    pub(super) end: Phase,
+    pub(super) end: Level,
     /// Every interval slides in this phase without a switch (0: not so).
-    pub(super) sign: Phase,
+    pub(super) sign: Level,
 }
 
 impl Pending {
     /// A block of intervals from `from` on, all plain in `phase` (`full`: the block's bits).
     #[inline(always)]
-    fn set_plain(&mut self, from: u64, phase: Phase, full: u32) {
+    fn set_plain(&mut self, from: u64, phase: Level, full: u32) {
         self.from = from;
         self.other = if phase == 0 { full } else { 0 };
         self.neg = if phase < 0 { full } else { 0 };
@@ -75,7 +75,7 @@ pub(super) struct Ident<T> {
 impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H> {
     /// An event changed the phases from interval `i` on (`at_start`: all of interval i, else
     /// from a switch inside it): update the pending identification block.
-    pub(super) fn note_event(&mut self, i: u64, at_start: bool, phase: Phase) {
+    pub(super) fn note_event(&mut self, i: u64, at_start: bool, phase: Level) {
         let (full, p) = (self.id.full, &mut self.id.pend);
         let Some(j) = i.checked_sub(p.from) else {
             // The whole block after the event (not reached: events do not reach final blocks).

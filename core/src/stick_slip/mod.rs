@@ -94,5 +94,5 @@ pub use coefficients::StickSlipCoefficients;
 pub use config::{history_for_age, storage_for, StickSlipConfig, MAX_IDENTIFY_EVERY};
 pub use estimator::StickSlipEstimator;
 pub use packed::MAX_SWITCHES;
-pub use phase::Phase;
+pub use phase::SlidingPhase;
 pub use rls::MuEstimate;

@@ -5,7 +5,7 @@ use super::estimator::StickSlipEstimator;
 use super::maps::{mat, sliding_map, stuck_step};
 use super::observer::correct;
 use super::packed::{self, MAX_SWITCHES};
-use super::phase::Phase;
+use super::phase::Level;
 use crate::math::{Real, Transcendentals};
 
 impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H> {
@@ -14,7 +14,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
     pub(super) fn piece(
         &self,
         z: [T; 2],
-        phase: Phase,
+        phase: Level,
         (fa, fb): (T, T),
         (u0, u1): (T, T),
         mu: T,

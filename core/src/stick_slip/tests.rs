@@ -2,6 +2,7 @@
 
 use super::maps::mat;
 use super::packed;
+use super::phase::Level;
 use super::*;
 use crate::error::Param;
 use crate::math::{F32Poly, Libm};
@@ -198,7 +199,7 @@ fn identifies_mu_from_a_sliding_response() {
 struct Reference {
     /// Interval j's phases and switch fractions (j < k).
     iv: std::vec::Vec<(u8, [f64; MAX_SWITCHES])>,
-    phase: Phase,
+    phase: Level,
     zh: [f64; 2],
     zu: [f64; 2],
     /// The state at the end of the block before.
@@ -208,7 +209,7 @@ struct Reference {
 }
 
 impl Reference {
-    fn push(&mut self, phase: Phase, age: f64) {
+    fn push(&mut self, phase: Level, age: f64) {
         let k = self.iv.len();
         if k == 0 || age == 0.0 {
             self.phase = phase;
@@ -569,4 +570,27 @@ fn blocks_of_unequal_lengths_are_an_error() {
     assert!(e.update_block(&[1.0; 2], &[1.0; 2], &mut out).is_err());
     assert_eq!(e.sample_index(), 0, "nothing processed");
     assert!(e.update_block(&[], &[], &mut []).is_ok());
+}
+
+#[test]
+fn sliding_phases_are_their_friction_levels() {
+    for p in [
+        SlidingPhase::Negative,
+        SlidingPhase::Stuck,
+        SlidingPhase::Positive,
+    ] {
+        assert_eq!(SlidingPhase::from_level(p.level()), Ok(p));
+    }
+    assert_eq!(SlidingPhase::Negative.level(), -1);
+    assert_eq!(SlidingPhase::Positive.level(), 1);
+    assert_eq!(
+        SlidingPhase::from_level(2).unwrap_err().param(),
+        Param::Phase
+    );
+    let s = structure(0.2, 0.05);
+    let mut e =
+        StickSlipEstimator::<f32, F32Poly, 64>::new(&s, 1e4, StickSlipConfig::DEFAULT).unwrap();
+    assert_eq!(e.phase(), SlidingPhase::Stuck);
+    e.push_event(SlidingPhase::Negative.level(), 0.0).unwrap();
+    assert_eq!(e.phase(), SlidingPhase::Negative);
 }
