@@ -107,21 +107,19 @@ const MODELS: [&str; 3] = ["fixed-base", "rectangular", "stick-slip"];
 /// The stick-slip estimator's settings in the firmware (host-sim's `model::STICK_SLIP_CONFIG`,
 /// `for_rate` of the scene's rate, which `host-sim qemu` checks against the firmware's `model`
 /// message): μ identified and adopted at the start of each sliding episode.
-const STICK_SLIP: ssvr_core::stick_slip::StickSlipConfig =
-    ssvr_core::stick_slip::StickSlipConfig {
-        use_identified_mu: true,
-        ..ssvr_core::stick_slip::StickSlipConfig::DEFAULT
-    };
+const STICK_SLIP: ssvr_core::stick_slip::StickSlipConfig = ssvr_core::stick_slip::StickSlipConfig {
+    use_identified_mu: true,
+    ..ssvr_core::stick_slip::StickSlipConfig::DEFAULT
+};
 
 /// The fixed-base model's settings (host-sim's `model::FIXED_BASE_CONFIG`): no identification
 /// (the estimator never leaves its stuck phase, so identifying μ would change nothing but cost
 /// instructions on every sample).
-const FIXED_BASE: ssvr_core::stick_slip::StickSlipConfig =
-    ssvr_core::stick_slip::StickSlipConfig {
-        identify_mu: false,
-        observer_bandwidth: 0.0,
-        ..STICK_SLIP
-    };
+const FIXED_BASE: ssvr_core::stick_slip::StickSlipConfig = ssvr_core::stick_slip::StickSlipConfig {
+    identify_mu: false,
+    observer_bandwidth: 0.0,
+    ..STICK_SLIP
+};
 
 const CHANNELS: [&str; 4] = ["table_accel", "base_accel", "top_accel", "displacement"];
 /// host-sim's defaults for a scene without a `[sensors]` table.
@@ -386,9 +384,7 @@ impl Scene {
 
     /// Consts of the estimator model: its name, the stick-slip settings and history.
     fn model_consts(&self, model: &str) -> String {
-        use ssvr_core::stick_slip::{
-            history_for_age, StickSlipCoefficients, StickSlipEstimator,
-        };
+        use ssvr_core::stick_slip::{history_for_age, StickSlipCoefficients, StickSlipEstimator};
         let max_age = self.max_age;
         let history = history_for_age(max_age);
         let structure = ssvr_core::Structure::new(self.params)

@@ -228,7 +228,9 @@ fn run_detector_sticks(t: &mut Ticks, det: &Detector) {
             for i in rise..rise + STAIR_SAMPLES {
                 match black_box(&mut d).process(stair_signal(i, period, rise)) {
                     Some(ssvr_core::detect::displacement::SlipEvent::Stick { .. }) => sticks += 1,
-                    Some(ssvr_core::detect::displacement::SlipEvent::SlipStart { .. }) => starts += 1,
+                    Some(ssvr_core::detect::displacement::SlipEvent::SlipStart { .. }) => {
+                        starts += 1
+                    }
                     _ => {}
                 }
             }
@@ -520,14 +522,13 @@ fn estimator_blocks(t: &mut Ticks, est: Estimator) -> (u32, u32, u32, u32) {
         }
     });
     // The prediction alone: the same estimator without the identification.
-    let mut bare =
-        match super::model::with_config(ssvr_core::stick_slip::StickSlipConfig {
-            identify_mu: false,
-            ..super::scene::STICK_SLIP
-        }) {
-            Ok(e) => e,
-            Err(_) => est.clone(),
-        };
+    let mut bare = match super::model::with_config(ssvr_core::stick_slip::StickSlipConfig {
+        identify_mu: false,
+        ..super::scene::STICK_SLIP
+    }) {
+        Ok(e) => e,
+        Err(_) => est.clone(),
+    };
     if bare.push_event(1, 0.0).is_err() {
         errors += 1;
     }

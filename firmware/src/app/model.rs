@@ -31,12 +31,7 @@ pub type Estimator = ssvr_core::recursion::Estimator32;
 pub type Estimator = ssvr_core::stick_slip::StickSlipEstimator<
     f32,
     ssvr_core::math::F32Poly,
-    {
-        ssvr_core::stick_slip::storage_for(
-            scene::HISTORY,
-            scene::STICK_SLIP.identify_every,
-        )
-    },
+    { ssvr_core::stick_slip::storage_for(scene::HISTORY, scene::STICK_SLIP.identify_every) },
 >;
 
 /// The largest event age pushed (samples); older events are clamped to it.
@@ -68,13 +63,10 @@ pub fn new() -> Result<Estimator, Error> {
 /// The stick-slip estimator of the compiled-in scene with other settings (the benchmark's
 /// prediction-only run).
 #[cfg(not(ssvr_model = "rectangular"))]
-pub fn with_config(
-    cfg: ssvr_core::stick_slip::StickSlipConfig,
-) -> Result<Estimator, Error> {
-    let c = ssvr_core::stick_slip::StickSlipCoefficients::from_bits(
-        &scene::STICK_SLIP_COEFFICIENTS,
-    )
-    .ok_or(Error::NotFinite(ssvr_core::Param::SampleRate))?;
+pub fn with_config(cfg: ssvr_core::stick_slip::StickSlipConfig) -> Result<Estimator, Error> {
+    let c =
+        ssvr_core::stick_slip::StickSlipCoefficients::from_bits(&scene::STICK_SLIP_COEFFICIENTS)
+            .ok_or(Error::NotFinite(ssvr_core::Param::SampleRate))?;
     Estimator::from_coefficients(c, cfg, scene::HISTORY)
 }
 
