@@ -1,10 +1,8 @@
 //! Host benchmarks: ns/sample of the recursion (f32, f64, libm and micromath at reversals) and of
 //! the closed form with 10, 10^3 and 10^4 past reversals (undamped: every term is kept).
 use criterion::{black_box, criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
-use ssvr_core::duhamel_closed_form::{DuhamelClosedForm, ReversalTrain};
-use ssvr_core::duhamel_recursion::{
-    Estimator32, Estimator32Libm, Estimator32Micromath, Estimator64,
-};
+use ssvr_core::closed_form::duhamel::{DuhamelClosedForm, ReversalTrain};
+use ssvr_core::recursion::{Estimator32, Estimator32Libm, Estimator32Micromath, Estimator64};
 use ssvr_core::{Structure, StructureParams};
 
 fn table1(xi: f64) -> Structure {

@@ -37,6 +37,36 @@ pub enum Param {
     EventTime,
     /// The length of a block of samples (its slices must be equally long).
     BlockLength,
+    /// The friction level a reversal sets (units of F0, in [−1, 1]).
+    ReversalLevel,
+    /// The contact phase of an event (−1, 0 stuck or +1).
+    Phase,
+    /// The length of a precomputed table (its const capacity).
+    TableLength,
+    /// A sensor's noise RMS a detector is set for.
+    NoiseRms,
+    /// The displacement detector's hysteresis (m).
+    Hysteresis,
+    /// The displacement detector's fit half-width (samples; its fits must fit in the ring).
+    FitHalf,
+    /// The displacement detector's samples within the hysteresis before a stick.
+    StickSamples,
+    /// The acceleration detector's threshold (m/s²).
+    Threshold,
+    /// The acceleration detector's samples confirming a slip start.
+    ConfirmSamples,
+    /// The acceleration detector's samples below the threshold before a stall stick.
+    StallSamples,
+    /// The length of a detector's ring (its const capacity).
+    RingLength,
+    /// The RLS forgetting factor λ of the friction identification.
+    Forgetting,
+    /// The length of the friction identification's blocks (samples).
+    IdentifyEvery,
+    /// The history of an estimator (samples).
+    History,
+    /// The stuck-phase observer's bandwidth (units of p).
+    ObserverBandwidth,
 }
 
 impl Param {
@@ -59,6 +89,21 @@ impl Param {
             Param::SampleRate => "sample rate",
             Param::EventTime => "event time",
             Param::BlockLength => "block length",
+            Param::ReversalLevel => "reversal level",
+            Param::Phase => "phase",
+            Param::TableLength => "table length",
+            Param::NoiseRms => "noise rms",
+            Param::Hysteresis => "hysteresis",
+            Param::FitHalf => "fit half-width",
+            Param::StickSamples => "stick samples",
+            Param::Threshold => "threshold",
+            Param::ConfirmSamples => "confirm samples",
+            Param::StallSamples => "stall samples",
+            Param::RingLength => "ring length",
+            Param::Forgetting => "forgetting factor",
+            Param::IdentifyEvery => "identification block length",
+            Param::History => "history",
+            Param::ObserverBandwidth => "observer bandwidth",
         }
     }
 }

@@ -4,16 +4,20 @@
 //! spring and dashpot over a sliding base `m2` with Coulomb friction `μ(m1+m2)g`.
 //!
 //! * [`structure`]: the validated [`Structure`] and its derived quantities (M, p, a, ζ, n, ε, ε').
-//! * [`free_vibration`]: the exact free vibration of the relative motion (the building block of every
-//!   method), evaluated robustly in all three damping regimes.
-//! * [`fourier_series`]: the trapezoid (TFM, eq 14-18) and rectangular (RFM, eq 20-22) Fourier methods.
-//! * [`duhamel_closed_form`]: the rectangular Duhamel method (RDM, eq 36) generalised to any train of
-//!   friction reversals.
-//! * [`duhamel_recursion`]: eq (36) as an exact O(1)-per-sample recursion (the estimator).
-//! * [`reversal_detector`] and [`phase_detector`]: friction reversals, sticks and slip starts sensed
-//!   from the slip displacement, or from the slip acceleration (base minus table accelerometer).
-//! * [`stick_slip_estimator`]: the stick-slip aware estimator with online friction identification.
-//! * [`duhamel_truncated`]: eq (36) truncated to the K newest reversals (O(K) per sample; a baseline).
+//! * [`closed_form`]: the closed forms, evaluated from the whole friction history:
+//!   * [`closed_form::free_vibration`]: the exact free vibration of the relative motion (the
+//!     building block of every method), evaluated robustly in all three damping regimes;
+//!   * [`closed_form::fourier`]: the trapezoid (TFM, eq 14-18) and rectangular (RFM, eq 20-22)
+//!     Fourier methods;
+//!   * [`closed_form::duhamel`]: the rectangular Duhamel method (RDM, eq 36) generalised to any
+//!     train of friction reversals;
+//!   * [`closed_form::truncated`]: eq (36) truncated to the K newest reversals (O(K) per sample;
+//!     a baseline).
+//! * [`recursion`]: eq (36) as an exact O(1)-per-sample recursion (the estimator).
+//! * [`detect`]: friction reversals, sticks and slip starts sensed from the slip displacement
+//!   ([`detect::displacement`]), or from the slip acceleration (base minus table accelerometer,
+//!   [`detect::acceleration`]).
+//! * [`stick_slip`]: the stick-slip aware estimator with online friction identification.
 //!
 //! The library is `#![no_std]`, allocates nothing and never panics on any input: every fallible
 //! operation returns a typed [`Error`].
@@ -27,18 +31,14 @@
 #[cfg(any(test, feature = "std"))]
 extern crate std;
 
-pub mod duhamel_closed_form;
-pub mod duhamel_recursion;
-pub mod duhamel_truncated;
+pub mod closed_form;
+pub mod detect;
 pub mod error;
-pub mod fourier_series;
-pub mod free_vibration;
 pub mod math;
-pub mod phase_detector;
-pub mod reversal_detector;
-pub mod stick_slip_estimator;
+pub mod recursion;
+pub mod stick_slip;
 pub mod structure;
 
-pub use duhamel_closed_form::{Reversal, ReversalTrain};
+pub use closed_form::duhamel::{Reversal, ReversalTrain};
 pub use error::{Error, Param};
 pub use structure::{Regime, Structure, StructureParams};

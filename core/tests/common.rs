@@ -1,9 +1,9 @@
 //! Shared harness: run the recursion over a reversal train and compare it with the closed form.
 #![allow(dead_code)]
 
-use ssvr_core::duhamel_closed_form::{DuhamelClosedForm, ReversalTrain};
-use ssvr_core::duhamel_recursion::{DuhamelRecursion, TrainFeeder};
+use ssvr_core::closed_form::duhamel::{DuhamelClosedForm, ReversalTrain};
 use ssvr_core::math::{Real, Transcendentals};
+use ssvr_core::recursion::{DuhamelRecursion, TrainFeeder};
 use ssvr_core::{Structure, StructureParams};
 
 pub fn structure(m1: f64, m2: f64, f_hz: f64, xi: f64) -> Structure {

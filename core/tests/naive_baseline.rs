@@ -5,8 +5,8 @@
 //! that it does fail where predicted (so the comparison in docs/PERFORMANCE.md stays true).
 mod common;
 use common::*;
-use ssvr_core::duhamel_closed_form::{DuhamelClosedForm, ReversalTrain};
-use ssvr_core::free_vibration::Kernel;
+use ssvr_core::closed_form::duhamel::{DuhamelClosedForm, ReversalTrain};
+use ssvr_core::closed_form::free_vibration::Kernel;
 use ssvr_core::math::Libm;
 use ssvr_core::Structure;
 

@@ -4,7 +4,7 @@
 mod common;
 use common::*;
 use proptest::prelude::*;
-use ssvr_core::duhamel_closed_form::{Reversal, ReversalTrain};
+use ssvr_core::closed_form::duhamel::{Reversal, ReversalTrain};
 use ssvr_core::math::Libm;
 
 proptest! {

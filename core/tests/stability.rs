@@ -2,7 +2,7 @@
 //! Bounds: max error / max(gμ, peak |ü1|) ≤ 1e-5 in f32 and ≤ 1e-10 in f64 on every case.
 mod common;
 use common::*;
-use ssvr_core::duhamel_closed_form::ReversalTrain;
+use ssvr_core::closed_form::duhamel::ReversalTrain;
 use ssvr_core::math::{F32Poly, Libm, Micromath};
 use ssvr_core::Structure;
 
@@ -191,15 +191,15 @@ fn late_detections_are_back_dated() {
     let s = table1(0.05);
     let rate = 1e4;
     let train = paper_train(0.0715);
-    let cf = ssvr_core::duhamel_closed_form::DuhamelClosedForm::new(&s);
+    let cf = ssvr_core::closed_form::duhamel::DuhamelClosedForm::new(&s);
     for (label, lag) in [
         ("late 1.5", 1.5f64),
         ("late 12.25", 12.25),
         ("late 60.5", 60.5),
     ] {
-        let mut e_l = ssvr_core::duhamel_recursion::Estimator32Libm::new(&s, rate).unwrap();
-        let mut e_m = ssvr_core::duhamel_recursion::Estimator32::new(&s, rate).unwrap();
-        let mut e_u = ssvr_core::duhamel_recursion::Estimator32Micromath::new(&s, rate).unwrap();
+        let mut e_l = ssvr_core::recursion::Estimator32Libm::new(&s, rate).unwrap();
+        let mut e_m = ssvr_core::recursion::Estimator32::new(&s, rate).unwrap();
+        let mut e_u = ssvr_core::recursion::Estimator32Micromath::new(&s, rate).unwrap();
         let (mut next, mut max_l, mut max_m, mut max_u) = (0usize, 0.0f64, 0.0f64, 0.0f64);
         for k in 0..100_000u64 {
             let t = k as f64 / rate;

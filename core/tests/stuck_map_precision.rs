@@ -6,7 +6,7 @@
 //! (ξ = 0.9 with the observer; bound 1e-4); the former correction-then-map form measured the same
 //! to ±30 %. With the observer the error stays flat over the run.
 use ssvr_core::math::{F32Poly, Libm};
-use ssvr_core::stick_slip_estimator::{StickSlipConfig, StickSlipEstimator};
+use ssvr_core::stick_slip::{StickSlipConfig, StickSlipEstimator};
 use ssvr_core::{Structure, StructureParams};
 
 /// (max error / peak over the run, max error in the first tenth, in the last tenth).

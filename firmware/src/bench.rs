@@ -48,9 +48,9 @@ use core::hint::black_box;
 use core::sync::atomic::{compiler_fence, Ordering};
 use cortex_m::peripheral::syst::SystClkSource;
 use cortex_m::peripheral::SYST;
-use ssvr_core::duhamel_recursion::Estimator32;
-use ssvr_core::reversal_detector::SlipEvent;
-use ssvr_core::stick_slip_estimator::{StickSlipCoefficients, StickSlipConfig};
+use ssvr_core::detect::displacement::SlipEvent;
+use ssvr_core::recursion::Estimator32;
+use ssvr_core::stick_slip::{StickSlipCoefficients, StickSlipConfig};
 use ssvr_proto::model::StickSlipF32 as StickSlipEstimator;
 use ssvr_proto::{
     DetectorInput, DetectorPlan, EventDetector, EventSource, Frame, Pipeline, Plan,

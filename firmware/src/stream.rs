@@ -27,7 +27,7 @@ pub fn emit_mu(pipe: &ImagePipeline) {
             "mu estimate={=f64} std={=f64} samples={=u32}",
             m.mu,
             m.std,
-            m.samples
+            m.blocks
         ),
         None => defmt::info!("mu none"),
     }

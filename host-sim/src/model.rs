@@ -11,9 +11,8 @@ pub use ssvr_proto::ModelKind as Model;
 
 /// A model's name on the command line (`--model`).
 pub fn parse(name: &str) -> Result<Model, String> {
-    Model::from_name(name).ok_or_else(|| {
-        format!("`{name}`: expected one of fixed-base, rectangular, stick-slip")
-    })
+    Model::from_name(name)
+        .ok_or_else(|| format!("`{name}`: expected one of fixed-base, rectangular, stick-slip"))
 }
 
 /// The smallest model that serves the simulated run, with the reason in words.

@@ -43,7 +43,7 @@ use crate::sensors::SensorModel;
 use crate::truth::{simulate, EventKind, Phase, TruthInput};
 use anyhow::{anyhow, bail, Context, Result};
 use serde::Serialize;
-use ssvr_core::duhamel_recursion::Estimator32;
+use ssvr_core::recursion::Estimator32;
 use ssvr_proto::{flags, DetectorPlan, Event, EventKind as FrameEventKind, Plan};
 use std::fmt;
 use std::io::{BufWriter, Write};

@@ -4,7 +4,7 @@
 use host_sim::table_motion::TableMotion;
 use host_sim::truth::{simulate, EventKind, TruthInput};
 use ssvr_core::math::{F32Poly, Libm, Real, Transcendentals};
-use ssvr_core::stick_slip_estimator::{StickSlipConfig, StickSlipEstimator};
+use ssvr_core::stick_slip::{StickSlipConfig, StickSlipEstimator};
 use ssvr_core::{Structure, StructureParams};
 
 fn structure(m1: f64, m2: f64, f_hz: f64, xi: f64, mu: f64, g: f64) -> Structure {
@@ -209,7 +209,7 @@ fn identify(truth_mu: f64, model_mu: f64, table: &TableMotion, duration: f64) ->
         est.update(f.table_accel_m_s2, f.top_accel_m_s2);
     }
     let m = est.mu_estimate().unwrap();
-    (m.mu, m.std, m.samples)
+    (m.mu, m.std, m.blocks)
 }
 
 #[test]

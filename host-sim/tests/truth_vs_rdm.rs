@@ -18,7 +18,7 @@
 
 use host_sim::table_motion::TableMotion;
 use host_sim::truth::{simulate, EventKind, Phase, TruthInput};
-use ssvr_core::duhamel_closed_form::DuhamelClosedForm;
+use ssvr_core::closed_form::duhamel::DuhamelClosedForm;
 use ssvr_core::{Reversal, ReversalTrain, Structure, StructureParams};
 
 fn table2_test1() -> (Structure, TableMotion) {

@@ -10,8 +10,8 @@
 use crate::channel::{Channel, CHANNELS};
 use crate::flags;
 use crate::plan::{DetectorPlan, Plan, PlanError};
-use ssvr_core::phase_detector::PhaseDetector;
-use ssvr_core::reversal_detector::{ReversalDetector, SlipEvent};
+use ssvr_core::detect::acceleration::PhaseDetector;
+use ssvr_core::detect::displacement::{ReversalDetector, SlipEvent};
 
 /// The displacement detector with a ring of `N` samples.
 pub type DisplacementDetector<const N: usize> = ReversalDetector<N>;

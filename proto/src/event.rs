@@ -1,6 +1,6 @@
 //! Friction events as the pipeline pushes them to the model and streams them.
 
-use ssvr_core::reversal_detector::SlipEvent;
+use ssvr_core::detect::displacement::SlipEvent;
 
 /// What a friction event is (the `ev` field of a frame).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -23,7 +23,7 @@ use crate::event::{Event, EventKind};
 use crate::flags;
 use crate::frame::{Frame, Sample};
 use crate::model::{Model, Pushed};
-use ssvr_core::stick_slip_estimator::MuEstimate;
+use ssvr_core::stick_slip::MuEstimate;
 
 /// Samples per batch: 16 (1.6 ms at 10 kHz) brings the stick-slip estimator's steady-state
 /// sample under 40 M4F instructions (each run's set-up and the identification blocks spread

@@ -7,12 +7,10 @@
 //! the plan it expects.
 
 use crate::model::ModelKind;
-use ssvr_core::duhamel_recursion::Estimator32;
-use ssvr_core::phase_detector::PhaseDetectorConfig;
-use ssvr_core::reversal_detector::DetectorConfig;
-use ssvr_core::stick_slip_estimator::{
-    history_for_age, storage_for, StickSlipCoefficients, StickSlipConfig,
-};
+use ssvr_core::detect::acceleration::PhaseDetectorConfig;
+use ssvr_core::detect::displacement::DetectorConfig;
+use ssvr_core::recursion::Estimator32;
+use ssvr_core::stick_slip::{history_for_age, storage_for, StickSlipCoefficients, StickSlipConfig};
 use ssvr_core::{Error, Structure, StructureParams};
 
 /// The longest stick-slip history (samples) a plan may ask for: the host's storage.
@@ -205,7 +203,7 @@ impl Plan {
         w.u32(c.identify_mu as u32);
         w.u32(c.use_identified_mu as u32);
         w.f64(c.forgetting);
-        w.u32(c.min_samples);
+        w.u32(c.min_blocks);
         w.u32(c.identify_every);
         w.f64(c.observer_bandwidth);
         let mut i = 0;
@@ -278,7 +276,7 @@ impl Plan {
             identify_mu: r.u32() != 0,
             use_identified_mu: r.u32() != 0,
             forgetting: r.f64(),
-            min_samples: r.u32(),
+            min_blocks: r.u32(),
             identify_every: r.u32(),
             observer_bandwidth: r.f64(),
         };

@@ -9,8 +9,8 @@
 //!
 //! Every error is reported relative to gμ. Run with `--nocapture` to see the measured numbers.
 
-use ssvr_core::duhamel_closed_form::{DuhamelClosedForm, Reversal, ReversalTrain};
-use ssvr_core::fourier_series::FourierResponse;
+use ssvr_core::closed_form::duhamel::{DuhamelClosedForm, Reversal, ReversalTrain};
+use ssvr_core::closed_form::fourier::FourierResponse;
 use ssvr_core::{Regime, Structure, StructureParams};
 use ssvr_integration_tests::ode::{ForceStep, State, Tolerance, TwoMassModel};
 use std::f64::consts::PI;

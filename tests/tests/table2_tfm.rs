@@ -1,5 +1,5 @@
 //! TFM (eq 14-18, corrected) against the paper's Table 2 TFM column: an independent published table.
-use ssvr_core::fourier_series::Tfm;
+use ssvr_core::closed_form::fourier::Tfm;
 use ssvr_integration_tests::TABLE2;
 
 #[test]

@@ -6,7 +6,7 @@ use super::Precision;
 use crate::scene::Scene;
 use anyhow::{Context, Result};
 use serde::Serialize;
-use ssvr_core::duhamel_closed_form::DuhamelClosedForm;
+use ssvr_core::closed_form::duhamel::DuhamelClosedForm;
 
 /// Runs longer than this are compared on a dense subset (see [`check`]).
 pub const FULL_CHECK_SAMPLES: u64 = 2_000_000;

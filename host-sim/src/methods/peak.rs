@@ -5,7 +5,7 @@ use super::PeakMethod;
 use crate::scene::{Input, Scene};
 use anyhow::{anyhow, bail, Result};
 use serde::Serialize;
-use ssvr_core::fourier_series::{FourierResponse, Tfm};
+use ssvr_core::closed_form::fourier::{FourierResponse, Tfm};
 
 /// The steady-state peak of |ü1| of a harmonic scene.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -111,7 +111,7 @@ pub fn peak(scene: &Scene, method: PeakMethod, harmonics: Option<u32>) -> Result
 
 /// A `--harmonics` count within 1 ..= MAX_HARMONICS (or none).
 pub(super) fn check_harmonics(h: Option<u32>) -> Result<()> {
-    use ssvr_core::fourier_series::MAX_HARMONICS;
+    use ssvr_core::closed_form::fourier::MAX_HARMONICS;
     match h {
         Some(h) if h == 0 || h > MAX_HARMONICS => {
             bail!("--harmonics {h} is out of range: expected 1 to {MAX_HARMONICS}")

@@ -4,8 +4,8 @@
 use super::Precision;
 use crate::scene::Scene;
 use anyhow::{anyhow, Result};
-use ssvr_core::duhamel_recursion::DuhamelRecursion;
 use ssvr_core::math::{Libm, Real, Transcendentals};
+use ssvr_core::recursion::DuhamelRecursion;
 use ssvr_core::{ReversalTrain, Structure};
 
 /// The estimator driven from a reversal train: before sample k it pushes every reversal j with

@@ -6,7 +6,7 @@ use super::recursion::{rdm_train, AnyRecursion};
 use super::{PeakMethod, Precision, TraceMethod};
 use crate::scene::Scene;
 use anyhow::{anyhow, bail, Result};
-use ssvr_core::duhamel_closed_form::DuhamelClosedForm;
+use ssvr_core::closed_form::duhamel::DuhamelClosedForm;
 use std::io::Write;
 
 /// Options of [`trace`].

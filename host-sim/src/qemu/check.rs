@@ -38,9 +38,9 @@ use crate::pipeline;
 use crate::scene::Scene;
 use anyhow::{anyhow, bail, Context, Result};
 use serde::Serialize;
-use ssvr_core::duhamel_closed_form::{DuhamelClosedForm, Reversal, ReversalTrain};
+use ssvr_core::closed_form::duhamel::{DuhamelClosedForm, Reversal, ReversalTrain};
 use ssvr_core::math::Libm;
-use ssvr_core::stick_slip_estimator::StickSlipEstimator;
+use ssvr_core::stick_slip::StickSlipEstimator;
 use ssvr_proto::plan::MAX_HISTORY;
 use ssvr_proto::{flags, EventKind, Frame, Plan, Sample};
 use std::path::{Path, PathBuf};
@@ -426,7 +426,7 @@ pub fn run_scene_model(
         }
     }
     let fw_mu = decode::mu(&frames);
-    let host_mu = host.mu_estimate().map(|m| (m.mu, m.std, m.samples));
+    let host_mu = host.mu_estimate().map(|m| (m.mu, m.std, m.blocks));
     let mu_equal = fw_mu == host_mu;
 
     // (b) The full-precision reference on the detected events; (c) the truth.

@@ -31,7 +31,7 @@
 //!
 //! Between events the motion is linear with constant friction and is propagated in closed form:
 //!
-//! * the sliding drift δ by the exact free vibration of `ssvr_core::free_vibration::Kernel` (all three
+//! * the sliding drift δ by the exact free vibration of `ssvr_core::closed_form::free_vibration::Kernel` (all three
 //!   damping regimes), the centre of mass by exact polynomial / trigonometric integrals of ü_g;
 //! * the stuck (fixed-base) drift by the exact homogeneous solution plus, for a record segment (ü_g
 //!   linear in time), the exact polynomial particular solution, or, for harmonic input, the exact

@@ -3,7 +3,7 @@
 
 use super::phase::Phase;
 use crate::table_motion::TableMotion;
-use ssvr_core::free_vibration::Kernel;
+use ssvr_core::closed_form::free_vibration::Kernel;
 use ssvr_core::{Regime, Structure};
 use std::f64::consts::PI;
 

@@ -18,7 +18,7 @@ pub use stick_slip::{FixedBaseModel, StickSlipF32, StickSlipModel};
 use crate::event::Event;
 use crate::frame::Frame;
 use crate::plan::{Plan, PlanError};
-use ssvr_core::stick_slip_estimator::{MuEstimate, StickSlipConfig};
+use ssvr_core::stick_slip::{MuEstimate, StickSlipConfig};
 use ssvr_core::Error;
 
 /// The stick-slip estimator's settings of the stick-slip model: μ identified and adopted at the

@@ -7,8 +7,8 @@ use super::{FromPlan, Model, ModelKind, Pushed};
 use crate::event::Event;
 use crate::frame::Frame;
 use crate::plan::{Plan, PlanError};
-use ssvr_core::duhamel_recursion::Estimator32;
-use ssvr_core::stick_slip_estimator::MuEstimate;
+use ssvr_core::recursion::Estimator32;
+use ssvr_core::stick_slip::MuEstimate;
 use ssvr_core::{Error, Structure};
 
 /// The rectangular model.

@@ -52,7 +52,7 @@ pub(super) fn dd_undamped(n: f64, gmu: f64, train: &[Reversal], t: f64) -> f64 {
 mod tests {
     use super::super::scenes::table1;
     use super::*;
-    use ssvr_core::duhamel_closed_form::DuhamelClosedForm;
+    use ssvr_core::closed_form::duhamel::DuhamelClosedForm;
     use ssvr_core::ReversalTrain;
 
     #[test]

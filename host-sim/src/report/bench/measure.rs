@@ -7,11 +7,11 @@ use super::double_double::dd_undamped;
 use super::scenes::{simulate_truth, BenchScene};
 use super::table::Row;
 use anyhow::{anyhow, Result};
-use ssvr_core::duhamel_closed_form::DuhamelClosedForm;
-use ssvr_core::duhamel_recursion::DuhamelRecursion;
-use ssvr_core::duhamel_truncated::TruncatedClosedForm;
-use ssvr_core::fourier_series::{FourierResponse, Tfm};
+use ssvr_core::closed_form::duhamel::DuhamelClosedForm;
+use ssvr_core::closed_form::fourier::{FourierResponse, Tfm};
+use ssvr_core::closed_form::truncated::TruncatedClosedForm;
 use ssvr_core::math::{F32Poly, Libm, Micromath, Real, Transcendentals};
+use ssvr_core::recursion::DuhamelRecursion;
 use ssvr_core::{Reversal, ReversalTrain};
 use std::time::Instant;
 

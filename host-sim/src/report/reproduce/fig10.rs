@@ -9,7 +9,7 @@ use crate::plot::reproduce::fig10_figure;
 use anyhow::{anyhow, Result};
 use rayon::prelude::*;
 use serde::Serialize;
-use ssvr_core::fourier_series::FourierResponse;
+use ssvr_core::closed_form::fourier::FourierResponse;
 use std::path::Path;
 
 /// The Fig. 10 sweep.

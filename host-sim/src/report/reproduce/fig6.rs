@@ -8,8 +8,8 @@ use crate::plot::reproduce::fig6_figure;
 use crate::truth::EventKind;
 use anyhow::{anyhow, Result};
 use serde::Serialize;
-use ssvr_core::duhamel_closed_form::DuhamelClosedForm;
-use ssvr_core::fourier_series::{FourierResponse, Tfm};
+use ssvr_core::closed_form::duhamel::DuhamelClosedForm;
+use ssvr_core::closed_form::fourier::{FourierResponse, Tfm};
 use ssvr_core::{ReversalTrain, Structure, StructureParams};
 use std::path::Path;
 

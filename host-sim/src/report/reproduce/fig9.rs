@@ -6,7 +6,7 @@ use crate::plot::figure;
 use crate::plot::reproduce::fig9_figure;
 use anyhow::Result;
 use serde::Serialize;
-use ssvr_core::duhamel_closed_form::DuhamelClosedForm;
+use ssvr_core::closed_form::duhamel::DuhamelClosedForm;
 use ssvr_core::ReversalTrain;
 use std::path::Path;
 

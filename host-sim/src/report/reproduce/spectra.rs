@@ -11,8 +11,8 @@ use crate::truth::{simulate, TruthInput};
 use anyhow::{anyhow, Result};
 use rayon::prelude::*;
 use serde::Serialize;
-use ssvr_core::duhamel_recursion::Estimator64;
-use ssvr_core::fourier_series::Tfm;
+use ssvr_core::closed_form::fourier::Tfm;
+use ssvr_core::recursion::Estimator64;
 use ssvr_core::{Reversal, ReversalTrain, Structure};
 use std::path::Path;
 
@@ -160,7 +160,7 @@ fn rdm_peak_with_train(s: &Structure, train: &[Reversal], duration: f64) -> Resu
     let rate = 2000.0;
     let mut est = Estimator64::new(s, rate).map_err(|e| anyhow!("estimator: {e}"))?;
     let t = ReversalTrain::Explicit(train);
-    let mut feeder = ssvr_core::duhamel_recursion::TrainFeeder::new(rate);
+    let mut feeder = ssvr_core::recursion::TrainFeeder::new(rate);
     let n = (duration * rate) as u64;
     let mut peak = 0.0f64;
     for k in 0..n {

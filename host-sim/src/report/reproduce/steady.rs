@@ -6,7 +6,7 @@ use crate::table_motion::TableMotion;
 use crate::truth::{simulate, EventKind, Truth, TruthInput};
 use anyhow::{anyhow, Result};
 use serde::Serialize;
-use ssvr_core::duhamel_recursion::Estimator64;
+use ssvr_core::recursion::Estimator64;
 use ssvr_core::Structure;
 
 /// Steady state of a truth under harmonic input: peak |ü1| over the last `cycles` periods, the same

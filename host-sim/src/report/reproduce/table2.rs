@@ -7,7 +7,7 @@ use super::{bar, structure, Sweep, PAPER_G};
 use anyhow::{anyhow, Result};
 use rayon::prelude::*;
 use serde::Serialize;
-use ssvr_core::fourier_series::{FourierResponse, Tfm};
+use ssvr_core::closed_form::fourier::{FourierResponse, Tfm};
 use ssvr_core::Structure;
 
 /// One row of the paper's Table 2 (units as printed: s, gal).

@@ -25,12 +25,14 @@
 //! input never panics: the velocity is then held at zero and events are timed mid-interval. Fixed-size ring of `N` samples; no
 //! heap, no panics.
 //!
-//! Compared with the displacement detector ([`crate::reversal_detector`]), which must wait for the
+//! Compared with the displacement detector ([`crate::detect::displacement`]), which must wait for the
 //! slip to move by several times the displacement noise (a slow breakaway stays below 1 µm for
 //! milliseconds), this one needs accelerometers on the base and the table.
 
+use super::ring::{rel, slot};
+use super::search::{golden_min, grid_min};
+use super::SlipEvent;
 use crate::error::{check, Error, Param};
-use crate::reversal_detector::{golden_min, grid_min, rel, slot, SlipEvent};
 
 /// A jump of s̈ (against its linear extrapolation) larger than this many thresholds is a change
 /// of the friction force.
@@ -69,7 +71,7 @@ impl PhaseDetectorConfig {
     /// searched up to 32 samples before the first one above the threshold.
     pub fn for_noise(accel_noise_rms_m_s2: f64) -> Result<Self, Error> {
         check(
-            Param::EventTime,
+            Param::NoiseRms,
             accel_noise_rms_m_s2,
             accel_noise_rms_m_s2 >= 0.0,
             ">= 0 m/s²",
@@ -134,16 +136,30 @@ impl<const N: usize> PhaseDetector<N> {
     /// A detector that starts stuck.
     pub fn new(cfg: PhaseDetectorConfig) -> Result<Self, Error> {
         check(
-            Param::EventTime,
+            Param::Threshold,
             cfg.threshold_m_s2 as f64,
             cfg.threshold_m_s2 > 0.0,
             "threshold > 0 m/s²",
         )?;
-        if cfg.confirm_samples < 2 || cfg.stall_samples < 2 || cfg.min_ring() > N {
+        if cfg.confirm_samples < 2 {
             return Err(Error::OutOfRange {
-                param: Param::EventTime,
+                param: Param::ConfirmSamples,
                 value: cfg.confirm_samples as f64,
-                expected: "confirm_samples >= 2, stall_samples >= 2, search + confirm samples + 2 <= buffer length",
+                expected: "confirm_samples >= 2",
+            });
+        }
+        if cfg.stall_samples < 2 {
+            return Err(Error::OutOfRange {
+                param: Param::StallSamples,
+                value: cfg.stall_samples as f64,
+                expected: "stall_samples >= 2",
+            });
+        }
+        if cfg.min_ring() > N {
+            return Err(Error::OutOfRange {
+                param: Param::RingLength,
+                value: N as f64,
+                expected: "a ring of at least search + confirm samples + 2 (a power of two)",
             });
         }
         Ok(Self {

@@ -1,6 +1,6 @@
 //! The rectangular Duhamel method truncated to the `K` most recent reversals, streaming.
 //!
-//! The generalised eq (36) (see [`crate::duhamel_closed_form`]) sums one free-vibration term per
+//! The generalised eq (36) (see [`crate::closed_form::duhamel`]) sums one free-vibration term per
 //! friction reversal:
 //!
 //! ```text
@@ -11,13 +11,13 @@
 //! [`heapless::Deque`] and sums those terms at each evaluation: O(K) per sample, no allocation. The
 //! dropped terms are the truncation error; with damping it falls as e^{−a·(age of the K-th newest
 //! reversal)}, for an undamped structure it does not fall at all (every reversal rings forever, so
-//! only the full sum or the exact recursion [`crate::duhamel_recursion`] is right). The result
-//! equals [`DuhamelClosedForm::evaluate`](crate::duhamel_closed_form::DuhamelClosedForm::evaluate)
+//! only the full sum or the exact recursion [`crate::recursion`] is right). The result
+//! equals [`DuhamelClosedForm::evaluate`](crate::closed_form::duhamel::DuhamelClosedForm::evaluate)
 //! with `max_terms = K` (same terms, same compensated summation).
 
-use crate::duhamel_closed_form::TERM_TOLERANCE;
+use crate::closed_form::duhamel::TERM_TOLERANCE;
+use crate::closed_form::free_vibration::Kernel;
 use crate::error::{Error, Param};
-use crate::free_vibration::Kernel;
 use crate::math::Libm;
 use crate::structure::Structure;
 use heapless::Deque;
@@ -71,11 +71,11 @@ impl<const K: usize> TruncatedClosedForm<K> {
             return Err(Error::NotIncreasing { index: self.pushed });
         }
         if !level.is_finite() {
-            return Err(Error::NotFinite(Param::ReversalSign));
+            return Err(Error::NotFinite(Param::ReversalLevel));
         }
         if !(-1.0..=1.0).contains(&level) {
             return Err(Error::OutOfRange {
-                param: Param::ReversalSign,
+                param: Param::ReversalLevel,
                 value: level,
                 expected: "a level in [-1, 1]",
             });
@@ -163,7 +163,7 @@ impl<const K: usize> TruncatedClosedForm<K> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::duhamel_closed_form::{DuhamelClosedForm, Reversal, ReversalTrain};
+    use crate::closed_form::duhamel::{DuhamelClosedForm, Reversal, ReversalTrain};
     use crate::structure::StructureParams;
     use std::vec::Vec;
 
@@ -282,7 +282,7 @@ mod tests {
         );
         assert_eq!(
             tc.push_reversal(0.2, 1.5).unwrap_err().param(),
-            Param::ReversalSign
+            Param::ReversalLevel
         );
         assert_eq!(tc.pushed(), 1);
         assert_eq!(tc.level(), 1.0);

@@ -29,9 +29,9 @@
 //! All three damping regimes use the same code (the kernel is continuous across Mξ² = 1), and
 //! every coefficient is finite for m2/m1 → 0.
 
-use crate::duhamel_closed_form::ReversalTrain;
+use crate::closed_form::duhamel::ReversalTrain;
+use crate::closed_form::free_vibration::Kernel;
 use crate::error::{check, Error, Param};
-use crate::free_vibration::Kernel;
 use crate::math::{Libm, Real, Transcendentals};
 use crate::structure::Structure;
 use core::marker::PhantomData;
@@ -67,7 +67,7 @@ impl<T: Real, const K: usize> Coefficients<T, K> {
         )?;
         if K == 0 {
             return Err(Error::OutOfRange {
-                param: Param::SampleRate,
+                param: Param::TableLength,
                 value: 0.0,
                 expected: "a table of at least one sample (K >= 1)",
             });
@@ -299,11 +299,11 @@ impl<T: Real, M: Transcendentals<T>, const K: usize> DuhamelRecursion<T, M, K> {
     pub fn push_reversal(&mut self, level: T, age_samples: T) -> Result<(), Error> {
         // Validation and arithmetic in T: no f64 on the reversal path (soft-float on the M4F).
         if !level.is_finite() {
-            return Err(Error::NotFinite(Param::ReversalSign));
+            return Err(Error::NotFinite(Param::ReversalLevel));
         }
         if level < -T::ONE || level > T::ONE {
             return Err(out_of_range(
-                Param::ReversalSign,
+                Param::ReversalLevel,
                 level,
                 "a level in [-1, 1]",
             ));
@@ -464,11 +464,11 @@ mod tests {
         );
         assert_eq!(
             e.push_reversal(f64::NAN, 0.5).unwrap_err(),
-            Error::NotFinite(Param::ReversalSign)
+            Error::NotFinite(Param::ReversalLevel)
         );
         assert_eq!(
             e.push_reversal(2.0, 0.5).unwrap_err().param(),
-            Param::ReversalSign
+            Param::ReversalLevel
         );
         assert_eq!(
             Estimator64::new(&table1(), 0.0).unwrap_err().param(),

@@ -16,52 +16,12 @@
 //! samples, which the estimator back-dates. Fixed-size ring buffer of `N` samples; no heap, no
 //! panics.
 
+use super::ring::{rel, slot};
+use super::search::{golden_min, grid_min};
 use crate::error::{check, Error, Param};
 
-/// A detected change of sliding.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum SlipEvent {
-    /// The base started to slide from rest in `direction` (+1 or −1).
-    SlipStart {
-        /// Slip direction.
-        direction: i8,
-        /// Samples between the event and the current sample (≥ 0).
-        age_samples: f32,
-    },
-    /// The sliding direction reversed; the base now slides in `direction`.
-    Reversal {
-        /// New slip direction.
-        direction: i8,
-        /// Samples between the event and the current sample (≥ 0).
-        age_samples: f32,
-    },
-    /// The base stopped and sticks.
-    Stick {
-        /// Samples between the event and the current sample (≥ 0).
-        age_samples: f32,
-    },
-}
-
-impl SlipEvent {
-    /// The friction level after the event in units of F0 (friction opposes slip; 0 while stuck).
-    pub fn friction_level(&self) -> f32 {
-        match *self {
-            SlipEvent::SlipStart { direction, .. } | SlipEvent::Reversal { direction, .. } => {
-                -(direction as f32)
-            }
-            SlipEvent::Stick { .. } => 0.0,
-        }
-    }
-
-    /// Age of the event in samples.
-    pub fn age_samples(&self) -> f32 {
-        match *self {
-            SlipEvent::SlipStart { age_samples, .. }
-            | SlipEvent::Reversal { age_samples, .. }
-            | SlipEvent::Stick { age_samples } => age_samples,
-        }
-    }
-}
+/// The events this detector reports (defined in [`crate::detect`]).
+pub use super::SlipEvent;
 
 /// Detector settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -88,7 +48,7 @@ impl DetectorConfig {
             sample_rate_hz > 0.0,
             "> 0 Hz",
         )?;
-        check(Param::EventTime, noise_rms_m, noise_rms_m >= 0.0, ">= 0 m")?;
+        check(Param::NoiseRms, noise_rms_m, noise_rms_m >= 0.0, ">= 0 m")?;
         let fit = libm::round(2e-3 * sample_rate_hz).clamp(2.0, 64.0) as usize;
         let stick = libm::round(10e-3 * sample_rate_hz).clamp(3.0, 1e6) as usize;
         Ok(Self {
@@ -163,16 +123,23 @@ impl<const N: usize> ReversalDetector<N> {
     /// A detector that starts stuck at the first sample's value.
     pub fn new(cfg: DetectorConfig) -> Result<Self, Error> {
         check(
-            Param::EventTime,
+            Param::Hysteresis,
             cfg.hysteresis_m as f64,
             cfg.hysteresis_m > 0.0,
             "hysteresis > 0 m",
         )?;
-        if cfg.fit_half < 2 || 2 * cfg.fit_half + 2 > N || cfg.stick_samples == 0 {
+        if cfg.fit_half < 2 || 2 * cfg.fit_half + 2 > N {
             return Err(Error::OutOfRange {
-                param: Param::EventTime,
+                param: Param::FitHalf,
                 value: cfg.fit_half as f64,
-                expected: "2 <= fit_half, 2*fit_half + 2 <= buffer length, stick_samples >= 1",
+                expected: "2 <= fit_half, 2*fit_half + 2 <= buffer length",
+            });
+        }
+        if cfg.stick_samples == 0 {
+            return Err(Error::OutOfRange {
+                param: Param::StickSamples,
+                value: cfg.stick_samples as f64,
+                expected: "stick_samples >= 1",
             });
         }
         Ok(Self {
@@ -535,54 +502,6 @@ impl<const N: usize> ReversalDetector<N> {
         }
         let ts = golden_min(&resid, (best - 3.0, best + 3.0), 16);
         (ts, resid(ts))
-    }
-}
-
-/// The best of f on the grid a, a + step, … ≤ b: (t, f(t)).
-pub(crate) fn grid_min(f: &impl Fn(f32) -> f32, (a, b): (f32, f32), step: f32) -> (f32, f32) {
-    let (mut best, mut best_r) = (a, f32::INFINITY);
-    let mut t = a;
-    while t <= b {
-        let r = f(t);
-        if r < best_r {
-            best_r = r;
-            best = t;
-        }
-        t += step;
-    }
-    (best, best_r)
-}
-
-/// Golden-section search for the minimum of f on [lo, hi] (`iters` steps): the midpoint of the
-/// final bracket.
-pub(crate) fn golden_min(f: &impl Fn(f32) -> f32, (mut lo, mut hi): (f32, f32), iters: u32) -> f32 {
-    let gr = 0.618_034f32;
-    for _ in 0..iters {
-        let (m1, m2) = (hi - gr * (hi - lo), lo + gr * (hi - lo));
-        if f(m1) < f(m2) {
-            hi = m2;
-        } else {
-            lo = m1;
-        }
-    }
-    0.5 * (lo + hi)
-}
-
-/// Time of sample i ≤ k relative to sample k (≤ 0), exact in f32 for any run length (the window
-/// is at most the ring long; absolute sample indices would lose sub-sample resolution in f32).
-#[inline(always)]
-pub(crate) fn rel(i: u64, k: u64) -> f32 {
-    -(k.saturating_sub(i) as u32 as f32)
-}
-
-/// Ring slot of sample i: a mask for power-of-two rings (a 64-bit modulo is a library call on
-/// the Cortex-M4F).
-#[inline(always)]
-pub(crate) fn slot<const N: usize>(i: u64) -> usize {
-    if N.is_power_of_two() {
-        (i as usize) & (N - 1)
-    } else {
-        (i % N as u64) as usize
     }
 }
 

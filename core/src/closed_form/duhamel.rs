@@ -9,8 +9,8 @@
 //! (compensated summation) and the sum stops once the bound e^{−r1 τ}(1 + aτ) of every older term is
 //! below 1e-20 (relative to gμ): an undamped structure keeps all terms.
 
+use crate::closed_form::free_vibration::Kernel;
 use crate::error::{Error, Param};
-use crate::free_vibration::Kernel;
 use crate::math::Libm;
 use crate::structure::Structure;
 
@@ -83,7 +83,7 @@ impl<'a> ReversalTrain<'a> {
             ReversalTrain::Explicit(rs) => {
                 for r in rs {
                     crate::error::check(
-                        Param::ReversalSign,
+                        Param::ReversalLevel,
                         r.level,
                         (-1.0..=1.0).contains(&r.level),
                         "a level in [-1, 1]",

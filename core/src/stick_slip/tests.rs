@@ -1,0 +1,596 @@
+//! Unit tests of the stick-slip estimator.
+
+use super::maps::mat;
+use super::packed;
+use super::phase::Level;
+use super::*;
+use crate::error::Param;
+use crate::math::{F32Poly, Libm};
+use crate::structure::{Structure, StructureParams};
+
+fn structure(mu: f64, xi: f64) -> Structure {
+    Structure::new(StructureParams {
+        m1_kg: 29.5,
+        m2_kg: 1.75,
+        natural_frequency_hz: 7.0,
+        damping_ratio: xi,
+        friction_coefficient: mu,
+        gravity_m_s2: 9.80665,
+    })
+    .unwrap()
+}
+
+/// Table acceleration and measured top acceleration of sample k.
+fn inputs(k: u64) -> (f32, f32) {
+    let t = k as f32 * 1e-4;
+    (2.0 * (43.9 * t).sin(), 1.5 * (40.0 * t).cos())
+}
+
+/// (sample, phase, age) events: slip, stick, slip back, old stick, slip.
+const EVENTS: [(u64, i8, f32); 6] = [
+    (40, 1, 0.25),
+    (300, 0, 100.5),
+    (330, -1, 3.75),
+    (700, 0, 60.0),
+    (705, 1, 0.0),
+    (720, 1, 2.5),
+];
+
+fn drive<const H: usize>(
+    est: &mut StickSlipEstimator<f32, F32Poly, H>,
+    n: u64,
+) -> std::vec::Vec<u32> {
+    (0..n)
+        .map(|k| {
+            for &(_, p, a) in EVENTS.iter().filter(|e| e.0 == k) {
+                est.push_event(p, a).unwrap();
+            }
+            let (u, y) = inputs(k);
+            est.update(u, y).to_bits()
+        })
+        .collect()
+}
+
+/// [`drive`] skipping the events older than the history.
+fn drive_lenient<const H: usize>(
+    est: &mut StickSlipEstimator<f32, F32Poly, H>,
+    n: u64,
+) -> std::vec::Vec<u32> {
+    (0..n)
+        .map(|k| {
+            for &(_, p, a) in EVENTS.iter().filter(|e| e.0 == k) {
+                let _ = est.push_event(p, a);
+            }
+            let (u, y) = inputs(k);
+            est.update(u, y).to_bits()
+        })
+        .collect()
+}
+
+#[test]
+fn coefficients_round_trip_through_their_bits() {
+    for xi in [0.05, 0.0, 0.99, 0.5] {
+        let s = structure(0.2, xi);
+        let c = StickSlipCoefficients::<f32>::new(&s, 1e4).unwrap();
+        let back = StickSlipCoefficients::<f32>::from_bits(&c.to_bits()).unwrap();
+        assert_eq!(back.to_bits(), c.to_bits());
+        let mut bad = c.to_bits();
+        bad[31] = 3;
+        assert!(StickSlipCoefficients::<f32>::from_bits(&bad).is_none());
+    }
+    let s = structure(0.2, 0.05);
+    let cfg = StickSlipConfig::DEFAULT;
+    let mut a = StickSlipEstimator::<f32, F32Poly, 200>::new(&s, 1e4, cfg).unwrap();
+    let c = StickSlipCoefficients::<f32>::from_bits(&a.coefficients().to_bits()).unwrap();
+    let mut b = StickSlipEstimator::<f32, F32Poly, 200>::from_coefficients(c, cfg, 200).unwrap();
+    assert_eq!(drive(&mut a, 3000), drive(&mut b, 3000));
+}
+
+#[test]
+fn the_history_length_not_the_storage_decides() {
+    let s = structure(0.2, 0.05);
+    let cfg = StickSlipConfig {
+        use_identified_mu: true,
+        min_blocks: 100,
+        ..StickSlipConfig::DEFAULT
+    };
+    let mut a = StickSlipEstimator::<f32, F32Poly, 144>::new(&s, 1e4, cfg).unwrap();
+    let mut b = StickSlipEstimator::<f32, F32Poly, 512>::with_history(&s, 1e4, cfg, 144).unwrap();
+    assert_eq!(b.history(), 144);
+    assert_eq!(drive(&mut a, 5000), drive(&mut b, 5000));
+    let (ma, mb) = (a.mu_estimate().unwrap(), b.mu_estimate().unwrap());
+    assert_eq!((ma.mu, ma.std, ma.blocks), (mb.mu, mb.std, mb.blocks));
+    for d in 0..150 {
+        assert_eq!(
+            a.prediction_at(4999 - d).map(f32::to_bits),
+            b.prediction_at(4999 - d).map(f32::to_bits)
+        );
+    }
+    assert!(a.prediction_at(5000 - 145).is_none() && a.prediction_at(5000).is_none());
+    // Storages with a copy slot, and a multiple of the block plus one (the wrap aligned with
+    // the blocks): the same results.
+    assert_eq!(storage_for(144, 16), 145);
+    let mut c = StickSlipEstimator::<f32, F32Poly, 145>::new(&s, 1e4, cfg).unwrap();
+    let mut d = StickSlipEstimator::<f32, F32Poly, 145>::with_history(&s, 1e4, cfg, 144).unwrap();
+    let mut e = StickSlipEstimator::<f32, F32Poly, 146>::with_history(&s, 1e4, cfg, 144).unwrap();
+    let mut b = StickSlipEstimator::<f32, F32Poly, 512>::with_history(&s, 1e4, cfg, 144).unwrap();
+    let want = drive(&mut b, 5000);
+    assert_eq!(drive(&mut c, 5000), want);
+    assert_eq!(drive(&mut d, 5000), want);
+    assert_eq!(drive(&mut e, 5000), want);
+    for short in [2, 3, 17, 39, 40, 48] {
+        let mut a =
+            StickSlipEstimator::<f32, F32Poly, 512>::with_history(&s, 1e4, cfg, short).unwrap();
+        let mut b =
+            StickSlipEstimator::<f32, F32Poly, 49>::with_history(&s, 1e4, cfg, short).unwrap();
+        let mut c =
+            StickSlipEstimator::<f32, F32Poly, 48>::with_history(&s, 1e4, cfg, short).unwrap();
+        let want = drive_lenient(&mut a, 3000);
+        assert_eq!(drive_lenient(&mut b, 3000), want, "{short}");
+        assert_eq!(drive_lenient(&mut c, 3000), want, "{short}");
+        assert_eq!(a.mu_estimate(), b.mu_estimate(), "{short}");
+        assert_eq!(a.mu_estimate(), c.mu_estimate(), "{short}");
+        for d in 0..60 {
+            let (pa, pb) = (a.prediction_at(2999 - d), b.prediction_at(2999 - d));
+            assert_eq!(pa.map(f32::to_bits), pb.map(f32::to_bits), "{short}");
+        }
+    }
+    assert!(StickSlipEstimator::<f32, F32Poly, 64>::with_history(&s, 1e4, cfg, 65).is_err());
+    assert!(StickSlipEstimator::<f32, F32Poly, 64>::with_history(&s, 1e4, cfg, 1).is_err());
+}
+
+#[test]
+fn events_within_the_history_are_accepted() {
+    let s = structure(0.2, 0.05);
+    let mut e =
+        StickSlipEstimator::<f64, Libm, 64>::new(&s, 1e4, StickSlipConfig::DEFAULT).unwrap();
+    for k in 0..10 {
+        e.update(0.1, f64::NAN);
+        // Back to sample 0, not before it (the next sample is k + 1).
+        assert!(e.push_event(1, k as f64 + 1.5).is_err());
+        assert!(e.push_event(1, k as f64 + 1.0).is_ok());
+        assert!(e.push_event(1, k as f64 + 0.5).is_ok());
+    }
+    for _ in 0..100 {
+        e.update(0.1, f64::NAN);
+    }
+    // history 64: an age < 63 samples, or exactly 63 (on a sample), is accepted.
+    for age in [0.0, 0.5, 1.0, 61.5, 62.0, 62.75, 63.0] {
+        assert!(e.push_event(0, age).is_ok(), "{age}");
+    }
+    for age in [63.5, 64.0, 1e9, f64::INFINITY, f64::NAN, -1.0] {
+        assert!(e.push_event(0, age).is_err(), "{age}");
+    }
+    assert!(e.push_event(2, 1.0).is_err());
+}
+
+#[test]
+fn identifies_mu_from_a_sliding_response() {
+    // The measured top acceleration: the model itself with μ = 0.2, sliding back and forth;
+    // the estimator starts from μ = 0.25.
+    let (truth_s, model_s) = (structure(0.2, 0.05), structure(0.25, 0.05));
+    let cfg = StickSlipConfig {
+        identify_mu: false,
+        ..StickSlipConfig::DEFAULT
+    };
+    let mut truth = StickSlipEstimator::<f64, Libm, 64>::new(&truth_s, 1e4, cfg).unwrap();
+    let mut est =
+        StickSlipEstimator::<f64, Libm, 64>::new(&model_s, 1e4, StickSlipConfig::DEFAULT).unwrap();
+    for k in 0..40_000u64 {
+        if k % 700 == 0 {
+            let p = if (k / 700) % 2 == 0 { 1 } else { -1 };
+            truth.push_event(p, 0.0).unwrap();
+            est.push_event(p, 0.0).unwrap();
+        }
+        let t = k as f64 * 1e-4;
+        let u = 2.0 * (43.9 * t).sin();
+        let y = truth.update(u, f64::NAN);
+        est.update(u, y);
+    }
+    let m = est.mu_estimate().unwrap();
+    assert!((m.mu - 0.2).abs() < 1e-6, "{m:?}");
+    assert!(m.std >= 0.0 && m.std < 1e-3, "{m:?}");
+    assert_eq!(est.mu_used(), 0.25);
+}
+
+/// A plain per-sample reference of the identification (phases kept for every interval, z_h
+/// and z_u advanced sample by sample), fed the same events and reading the estimator's
+/// stored states at the episode starts.
+struct Reference {
+    /// Interval j's phases and switch fractions (j < k).
+    iv: std::vec::Vec<(u8, [f64; MAX_SWITCHES])>,
+    phase: Level,
+    zh: [f64; 2],
+    zu: [f64; 2],
+    /// The state at the end of the block before.
+    z_start: [f64; 2],
+    episode: bool,
+    rls: (f64, f64, f64, f64, u32),
+}
+
+impl Reference {
+    fn push(&mut self, phase: Level, age: f64) {
+        let k = self.iv.len();
+        if k == 0 || age == 0.0 {
+            self.phase = phase;
+            return;
+        }
+        let whole = age.floor();
+        let frac = age - whole;
+        let (back, f) = if frac == 0.0 {
+            (whole as usize, 0.0)
+        } else {
+            (whole as usize + 1, 1.0 - frac)
+        };
+        let i = k - back;
+        if f == 0.0 {
+            self.iv[i].0 = packed::new(phase);
+        } else {
+            let (b, fr) = &mut self.iv[i];
+            packed::add(b, fr, f, phase);
+        }
+        for j in i + 1..k {
+            self.iv[j].0 = packed::new(phase);
+        }
+        self.phase = phase;
+    }
+
+    /// After sample k was stored (y its measured top acceleration, the estimator `e`).
+    fn stored<const H: usize>(&mut self, e: &StickSlipEstimator<f64, Libm, H>, ys: &[f64]) {
+        self.iv.push((packed::new(self.phase), [0.0; MAX_SWITCHES]));
+        let k = self.iv.len() as u64 - 1;
+        let (n, len) = (e.cfg.identify_every as u64, e.len as u64);
+        if k + 2 < len + n || !(k + 2 - len).is_multiple_of(n) {
+            return;
+        }
+        let d = k + 2 - len;
+        let c = &e.c;
+        let block = &self.iv[(d - n) as usize..d as usize];
+        let sliding = block
+            .iter()
+            .all(|(b, _)| packed::switches(*b) == 0 && packed::start(*b) != 0);
+        let end = packed::end(block[block.len() - 1].0);
+        if sliding && !self.episode {
+            // An episode starts at the block's start.
+            self.zh = self.z_start;
+            self.zu = [0.0; 2];
+            self.episode = true;
+        }
+        let z_end = e.slots[e.slot_of(d)].z;
+        if self.episode && sliding {
+            for (b, _) in block {
+                let g = if packed::start(*b) > 0 { c.g } else { -c.g };
+                let (wh, wu) = (mat(&c.phi_s, self.zh), mat(&c.phi_s, self.zu));
+                self.zh = [self.zh[0] + wh[0], self.zh[1] + wh[1]];
+                self.zu = [
+                    self.zu[0] + (wu[0] + g * c.force_s[0]),
+                    self.zu[1] + (wu[1] + g * c.force_s[1]),
+                ];
+            }
+            let y = ys[d as usize];
+            if y.is_finite() {
+                let (zh, zu) = (self.zh, self.zu);
+                let phi = zu[0];
+                let target = y - zh[0];
+                let lambda = e.cfg.forgetting.powi(n as i32);
+                let alpha = 1.0 - (1.0 - 1e-3f64).powi(n as i32);
+                let (mu, a, b, e2, cnt) = &mut self.rls;
+                let err = target - *mu * phi;
+                *a = lambda * *a + phi * phi;
+                *b = lambda * *b + phi * target;
+                *mu = *b / *a;
+                *e2 += (err * err - *e2) * alpha;
+                *cnt += 1;
+            }
+        } else if end != 0 {
+            self.zh = z_end;
+            self.zu = [0.0; 2];
+            self.episode = true;
+        } else {
+            self.episode = false;
+        }
+        self.z_start = z_end;
+    }
+}
+
+/// The estimator's identification against [`Reference`] over random events (storage `H`).
+fn check_identification<const H: usize>(
+    history: usize,
+    every: u32,
+    rate: f64,
+    rnd: &mut impl FnMut() -> f64,
+) {
+    let (truth_s, model_s) = (structure(0.2, 0.05), structure(0.25, 0.05));
+    let off = StickSlipConfig {
+        identify_mu: false,
+        ..StickSlipConfig::DEFAULT
+    };
+    let cfg = StickSlipConfig {
+        identify_every: every,
+        use_identified_mu: true,
+        min_blocks: 20,
+        ..StickSlipConfig::DEFAULT
+    };
+    let mut truth =
+        StickSlipEstimator::<f64, Libm, H>::with_history(&truth_s, 1e4, off, history).unwrap();
+    let mut est =
+        StickSlipEstimator::<f64, Libm, H>::with_history(&model_s, 1e4, cfg, history).unwrap();
+    let mut r = Reference {
+        iv: std::vec::Vec::new(),
+        phase: 0,
+        zh: [0.0; 2],
+        zu: [0.0; 2],
+        z_start: [0.0; 2],
+        episode: false,
+        rls: (0.25, 1.0, 0.25, 1e-4, 0),
+    };
+    let mut ys = std::vec::Vec::new();
+    for k in 0..30_000u64 {
+        while rnd() < rate {
+            // Mostly sliding, reversals in and between samples, some sticks.
+            let phase = [1, -1, 1, -1, 0][(rnd() * 5.0) as usize];
+            let age = match (rnd() * 4.0) as u32 {
+                0 => 0.0,
+                1 => (rnd() * (history as f64 - 1.0)).floor(),
+                _ => rnd() * (history as f64 - 2.0),
+            };
+            // (Older than the samples so far: rejected by both.)
+            if est.push_event(phase, age).is_ok() {
+                truth.push_event(phase, age).unwrap();
+                r.push(phase, age);
+            }
+        }
+        let u = 2.0 * (43.9 * k as f64 * 1e-4).sin();
+        let y = truth.update(u, f64::NAN);
+        ys.push(if k % 101 == 0 { f64::NAN } else { y });
+        est.update(u, ys[k as usize]);
+        r.stored(&est, &ys);
+    }
+    let m = est.mu_estimate().unwrap();
+    let (mu, a, _, e2, n) = r.rls;
+    let at = (H, history, every);
+    assert_eq!(m.blocks, n, "{at:?}");
+    assert!(n > 100, "{at:?}: {n}");
+    assert!((m.mu - mu).abs() < 1e-9 * mu.abs(), "{at:?}: {m:?} {mu}");
+    let std = (e2 / a).sqrt();
+    assert!((m.std - std).abs() < 1e-6 * std, "{at:?}: {m:?} {std}");
+}
+
+#[test]
+fn identification_matches_a_per_sample_reference() {
+    let mut seed = 0x9E37_79B9_7F4A_7C15u64;
+    let mut rnd = move || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for (history, every, rate) in [
+        (64, 16, 0.01),
+        (144, 16, 0.003),
+        (2, 4, 0.05),
+        (17, 32, 0.01),
+        (40, 1, 0.02),
+        (30, 7, 0.2),
+    ] {
+        check_identification::<200>(history, every, rate, &mut rnd);
+        if history <= 64 {
+            // A copy slot, the wrap aligned with the blocks where n divides 64.
+            check_identification::<65>(history, every, rate, &mut rnd);
+        }
+        if history == 64 {
+            // No copy slot.
+            check_identification::<64>(history, every, rate, &mut rnd);
+        }
+    }
+}
+
+/// The stuck-phase observer: an error injected into the state (10 ms of a wrong table
+/// acceleration) decays like critically damped dynamics at b·p, (1 + b·p·t)·e^(−b·p·t),
+/// whatever the damping, at fine and at coarse sampling; the measured top acceleration is an
+/// open-loop estimator's prediction (exact for the same model).
+#[test]
+fn the_observer_error_decays_at_its_bandwidth() {
+    for (xi, rate, b) in [
+        (0.0, 1e4, 2.0),
+        (0.05, 1e4, 2.0),
+        (0.9, 1e4, 2.0),
+        (0.3, 1e3, 10.0),
+        (0.0, 200.0, 10.0),
+    ] {
+        let s = structure(0.2, xi);
+        let open = StickSlipConfig {
+            identify_mu: false,
+            observer_bandwidth: 0.0,
+            ..StickSlipConfig::DEFAULT
+        };
+        let obs = StickSlipConfig {
+            observer_bandwidth: b,
+            ..open
+        };
+        let mut reference = StickSlipEstimator::<f64, Libm, 8>::new(&s, rate, open).unwrap();
+        let mut est = StickSlipEstimator::<f64, Libm, 8>::new(&s, rate, obs).unwrap();
+        let w = b * s.p();
+        let dt = 1.0 / rate;
+        let inject = (0.01 * rate).ceil() as u64;
+        let (mut e0, mut worst) = (0.0f64, 0.0f64);
+        for k in 0..(inject + (12.0 / (w * dt)) as u64) {
+            let u = (2.0 * core::f64::consts::PI * 3.0 * k as f64 * dt).sin();
+            let wrong = if k < inject { u + 1.0 } else { u };
+            let y = reference.update(u, f64::NAN);
+            let pred = est.update(wrong, y);
+            let err = (pred - y).abs();
+            if k == inject {
+                e0 = err.max(1e-12);
+            }
+            if k > inject {
+                let t = (k - inject) as f64 * dt;
+                let bound = 20.0 * (1.0 + w * t) * libm::exp(-w * t);
+                worst = worst.max(err / e0 / bound);
+            }
+        }
+        std::println!("xi {xi} rate {rate} b {b}: worst {:.3} of the bound", worst);
+        // Measured: ≤ 0.13 of the bound at 10 kHz, 0.50 at b·p·Δt = 0.44 (1 kHz, b = 10),
+        // where the discrete double eigenvalue's transient is larger than the continuous
+        // one; with the gain of the continuous design this case diverged.
+        assert!(worst < 1.0, "xi {xi} rate {rate} b {b}: {worst}");
+    }
+}
+
+#[test]
+fn for_rate_takes_any_rate() {
+    for r in [f64::NAN, -1.0, 0.0, 1.0, 1e3, 1e4, 1e9, f64::INFINITY] {
+        let c = StickSlipConfig::DEFAULT.for_rate(r);
+        assert!((1..=MAX_IDENTIFY_EVERY).contains(&c.identify_every), "{r}");
+    }
+    assert_eq!(StickSlipConfig::DEFAULT.for_rate(1e4).identify_every, 32);
+    assert_eq!(StickSlipConfig::DEFAULT.for_rate(1e3).identify_every, 3);
+}
+
+/// Events of sample k in a repeating pattern: slip, stick (late), slip back, stick, slip.
+fn pattern(k: u64) -> Option<(i8, f32)> {
+    match k % 1000 {
+        40 => Some((1, 0.25)),
+        300 => Some((0, 10.5)),
+        330 => Some((-1, 3.75)),
+        700 => Some((0, 20.0)),
+        705 => Some((1, 0.0)),
+        _ => None,
+    }
+}
+
+/// Inputs of sample k with a non-finite table acceleration now and then and a missing top
+/// acceleration now and then.
+fn gappy_inputs(k: u64) -> (f32, f32) {
+    let (u, y) = inputs(k);
+    let u = if k % 997 == 500 { f32::NAN } else { u };
+    let y = if k % 389 == 7 { f32::NAN } else { y };
+    (u, y)
+}
+
+fn block_vs_samples<const H: usize>(cfg: StickSlipConfig, history: usize, n: u64) {
+    let s = structure(0.2, 0.05);
+    let mut a = StickSlipEstimator::<f32, F32Poly, H>::with_history(&s, 1e4, cfg, history).unwrap();
+    let mut b = a.clone();
+    let want: std::vec::Vec<u32> = (0..n)
+        .map(|k| {
+            if let Some((p, age)) = pattern(k) {
+                a.push_event(p, age).unwrap();
+            }
+            let (u, y) = gappy_inputs(k);
+            a.update(u, y).to_bits()
+        })
+        .collect();
+    // Blocks of 1 to 40 samples, split where an event is pushed.
+    let mut got = std::vec::Vec::new();
+    let (mut k, mut len) = (0u64, 1u64);
+    while k < n {
+        if let Some((p, age)) = pattern(k) {
+            b.push_event(p, age).unwrap();
+        }
+        let end = (k + len).min(n);
+        let end = (k + 1..end).find(|&j| pattern(j).is_some()).unwrap_or(end);
+        let (table, top): (std::vec::Vec<f32>, std::vec::Vec<f32>) =
+            (k..end).map(gappy_inputs).unzip();
+        let mut out = std::vec![0.0f32; table.len()];
+        b.update_block(&table, &top, &mut out).unwrap();
+        got.extend(out.iter().map(|x| x.to_bits()));
+        k = end;
+        len = len * 7 % 41 + 1;
+    }
+    assert_eq!(got.len(), want.len());
+    let first = got.iter().zip(&want).position(|(g, w)| g != w);
+    assert_eq!(first, None, "first difference at sample {first:?}");
+    assert_eq!(a.mu_estimate(), b.mu_estimate());
+    assert!(a.mu_estimate().is_some());
+}
+
+#[test]
+fn blocks_give_the_per_sample_predictions_bit_for_bit() {
+    let cfg = StickSlipConfig {
+        use_identified_mu: true,
+        min_blocks: 50,
+        ..StickSlipConfig::DEFAULT
+    };
+    // The firmware's layout (storage = a multiple of the block plus one) and a plain one.
+    block_vs_samples::<{ storage_for(39, 32) }>(cfg, 39, 30_000);
+    block_vs_samples::<144>(cfg, 144, 30_000);
+    block_vs_samples::<64>(StickSlipConfig::DEFAULT.for_rate(1e3), 40, 30_000);
+}
+
+/// A non-finite table acceleration in the first slot after the ring's wrap, inside a block
+/// whose run reached the ring's last slot (found by fuzzing `update_block` against `update`):
+/// the redone sample reads its predecessor from the copy slot, not from the last slot the
+/// aborted run overwrote.
+#[test]
+fn a_redone_run_after_the_wrap_reads_the_copy_slot() {
+    let s = structure(0.2, 0.05);
+    let cfg = StickSlipConfig {
+        identify_mu: false,
+        ..StickSlipConfig::DEFAULT
+    };
+    for phase in [0, 1] {
+        for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+            let mut a =
+                StickSlipEstimator::<f32, F32Poly, 8>::with_history(&s, 1e4, cfg, 7).unwrap();
+            a.push_event(phase, 0.0).unwrap();
+            let mut b = a.clone();
+            let (mut want, mut got) = (std::vec::Vec::new(), std::vec::Vec::new());
+            for k in 0..7 {
+                let (u, y) = inputs(k);
+                want.push(a.update(u, y).to_bits());
+                got.push(b.update(u, y).to_bits());
+            }
+            let (mut table, top): (std::vec::Vec<f32>, std::vec::Vec<f32>) =
+                (7..30).map(inputs).unzip();
+            table[0] = bad;
+            want.extend(
+                table
+                    .iter()
+                    .zip(&top)
+                    .map(|(&u, &y)| a.update(u, y).to_bits()),
+            );
+            let mut out = std::vec![0.0f32; table.len()];
+            b.update_block(&table, &top, &mut out).unwrap();
+            got.extend(out.iter().map(|x| x.to_bits()));
+            assert_eq!(got, want, "phase {phase}, table {bad}");
+            assert!(out.iter().all(|x| x.is_finite()));
+        }
+    }
+}
+
+#[test]
+fn blocks_of_unequal_lengths_are_an_error() {
+    let s = structure(0.2, 0.05);
+    let mut e =
+        StickSlipEstimator::<f32, F32Poly, 64>::new(&s, 1e4, StickSlipConfig::DEFAULT).unwrap();
+    let mut out = [0.0f32; 3];
+    let err = e.update_block(&[1.0; 3], &[1.0; 2], &mut out).unwrap_err();
+    assert_eq!(err.param(), Param::BlockLength);
+    assert!(e.update_block(&[1.0; 2], &[1.0; 2], &mut out).is_err());
+    assert_eq!(e.sample_index(), 0, "nothing processed");
+    assert!(e.update_block(&[], &[], &mut []).is_ok());
+}
+
+#[test]
+fn sliding_phases_are_their_friction_levels() {
+    for p in [
+        SlidingPhase::Negative,
+        SlidingPhase::Stuck,
+        SlidingPhase::Positive,
+    ] {
+        assert_eq!(SlidingPhase::from_level(p.level()), Ok(p));
+    }
+    assert_eq!(SlidingPhase::Negative.level(), -1);
+    assert_eq!(SlidingPhase::Positive.level(), 1);
+    assert_eq!(
+        SlidingPhase::from_level(2).unwrap_err().param(),
+        Param::Phase
+    );
+    let s = structure(0.2, 0.05);
+    let mut e =
+        StickSlipEstimator::<f32, F32Poly, 64>::new(&s, 1e4, StickSlipConfig::DEFAULT).unwrap();
+    assert_eq!(e.phase(), SlidingPhase::Stuck);
+    e.push_event(SlidingPhase::Negative.level(), 0.0).unwrap();
+    assert_eq!(e.phase(), SlidingPhase::Negative);
+}
