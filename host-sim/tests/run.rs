@@ -405,7 +405,7 @@ fn the_model_fits_the_scene() {
             scene(0.05, 0.184, 2.0, 0.016, 0.2),
             "fixed-base",
         ),
-        // Table 2 test 1: slides continuously after one early stick (physics notes).
+        // Table 2 test 1: slides continuously after one early stick (docs/equations.md).
         (
             "t1.toml",
             scene(7.02, 0.13, 1.0, 0.0144, 0.125),

@@ -78,7 +78,7 @@ fn run<T: Real, M: Transcendentals<T>>(
 #[test]
 fn follows_the_truth_through_stick_phases() {
     let t1 = structure(29.5, 1.75, 7.0, 0.05, 0.2, 9.80665);
-    // Table 2 test 2: sticks twice per cycle (physics notes).
+    // Table 2 test 2: sticks twice per cycle (docs/equations.md, "Corrections to the print").
     let t2 = structure(2.0, 1.0, 1.0 / 0.184, 0.016, 0.2, 9.80);
     let elcentro = std::fs::read_to_string(
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/elcentro-1940-ns.txt"),

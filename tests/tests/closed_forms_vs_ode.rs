@@ -5,7 +5,7 @@
 //!   in all damping regimes, for the paper's periodic train and an irregular train with stuck phases.
 //! * Continuity of the closed form across Mξ² = 1, the m2 → 0 limit (eq 39), RFM = RDM steady state
 //!   ("(20) equals (36)"), RFM = lim_{α→0} TFM.
-//! * The integrator itself against exact solutions typed from the physics notes.
+//! * The integrator itself against exact solutions typed from docs/equations.md.
 //!
 //! Every error is reported relative to gμ. Run with `--nocapture` to see the measured numbers.
 
@@ -297,7 +297,7 @@ fn massless_base_limit_is_eq39() {
     // Eq (39): ü1 → gμ s(t) once the fast transient (rate ≈ 2a = 2Mpξ ≈ 4e9/s here) has died.
     const TOL: f64 = 1e-6;
     const SETTLE: f64 = 1e-6;
-    // The leading correction, typed from the transfer function of the physics notes: the slow pole
+    // The leading correction, typed from the transfer function in docs/equations.md: the slow pole
     // r1 = p/(2ξ)·(1 + ε), ε = 1/(4Mξ²), nearly cancels the zero at p/(2ξ) and leaves the residue ε,
     // so ü1 = gμ [s(t) + ε Σ_j Δs_j e^{−r1 (t − t_j)}] + O(ε², r1/(2a)). Checking this to 1e-10·gμ
     // shows the closed form is accurate far beyond the 1e-6 of eq (39) itself.
@@ -539,10 +539,10 @@ fn rfm_is_the_alpha_to_zero_limit_of_tfm() {
 }
 
 // ---------------------------------------------------------------------------------------------
-// 6. The integrator against exact solutions typed from the physics notes.
+// 6. The integrator against exact solutions typed from docs/equations.md.
 // ---------------------------------------------------------------------------------------------
 
-/// Derived constants typed from the physics notes: (p, ξ, M, a, gμ).
+/// Derived constants typed from docs/equations.md: (p, ξ, M, a, gμ).
 fn notes_constants(pr: &StructureParams) -> (f64, f64, f64, f64, f64) {
     let p = 2.0 * PI * pr.natural_frequency_hz;
     let xi = pr.damping_ratio;
@@ -557,7 +557,7 @@ fn notes_constants(pr: &StructureParams) -> (f64, f64, f64, f64, f64) {
 }
 
 /// Exact response from rest to F stepping 0 → +F0 at τ = 0: absolute state and ü1 = R(τ)
-/// (physics notes, "Step response"; δ = −(gμ/p²)(1 − g(τ)), centre of mass at gμτ²/2).
+/// (docs/equations.md, "Free vibration"; δ = −(gμ/p²)(1 − g(τ)), centre of mass at gμτ²/2).
 fn exact_step(pr: &StructureParams, tau: f64) -> (State, f64) {
     let (p, xi, m, a, gmu) = notes_constants(pr);
     let disc = 1.0 - m * xi * xi;
