@@ -224,9 +224,10 @@ fn late_detections_are_back_dated() {
                 .map_or(0.0, |j| train.get(j).unwrap().time_s);
             if t - last >= lag / rate || t < 0.0 {
                 let want = cf.accel(&train, t);
-                max_l = max_l.max((yl - want).abs() / s.gmu());
-                max_m = max_m.max((ym - want).abs() / s.gmu());
-                max_u = max_u.max((yu - want).abs() / s.gmu());
+                let err = |y: f64| (y - want).abs() / s.gmu();
+                max_l = max_finite(max_l, err(yl), label, format_args!("libm, sample {k}"));
+                max_m = max_finite(max_m, err(ym), label, format_args!("f32 poly, sample {k}"));
+                max_u = max_finite(max_u, err(yu), label, format_args!("micromath, sample {k}"));
             }
         }
         println!("{label} samples: libm {max_l:.3e}, f32 poly {max_m:.3e}, micromath {max_u:.3e}");
@@ -235,4 +236,22 @@ fn late_detections_are_back_dated() {
             "{label}: {max_l:e} {max_m:e}"
         );
     }
+}
+
+#[test]
+#[should_panic(expected = "recursion error at index 2 is not finite: NaN")]
+fn a_nan_error_fails_the_maximum() {
+    // `f64::max` would return 1e-9 here and the bound would pass.
+    finite_max("recursion error", [1e-9, 0.0, f64::NAN, 1e-12]);
+}
+
+#[test]
+#[should_panic(expected = "f32 poly error at sample 7 is not finite: inf")]
+fn an_infinite_error_fails_the_running_maximum() {
+    max_finite(
+        1e-9,
+        f64::INFINITY,
+        "f32 poly error",
+        format_args!("sample {}", 7),
+    );
 }

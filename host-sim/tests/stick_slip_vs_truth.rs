@@ -1,6 +1,8 @@
 //! The stick-slip aware estimator (ssvr-core) against the exact event-driven truth (host-sim), an
 //! independent implementation: fed the truth's own events (late, back-dated) and the exact table
 //! acceleration, the estimator must reproduce the truth's top acceleration up to rounding.
+mod common;
+use common::max_finite;
 use host_sim::table_motion::TableMotion;
 use host_sim::truth::{simulate, EventKind, TruthInput};
 use ssvr_core::math::{F32Poly, Libm, Real, Transcendentals};
@@ -67,9 +69,10 @@ fn run<T: Real, M: Transcendentals<T>>(
         let y = est.update(T::from_f64(ts.table_accel_m_s2), T::from_f64(f64::NAN));
         // Samples between an event and its (late) detection are wrong by design.
         let recent = events.get(next).is_some_and(|&(te, _)| te <= t);
-        peak = peak.max(ts.top_accel_m_s2.abs());
+        peak = max_finite(peak, ts.top_accel_m_s2.abs(), "truth |ü1|", k);
         if !recent {
-            max_err = max_err.max((y.to_f64() - ts.top_accel_m_s2).abs());
+            let e = (y.to_f64() - ts.top_accel_m_s2).abs();
+            max_err = max_finite(max_err, e, "estimator error", k);
         }
     }
     (max_err / peak, events.len())
@@ -267,12 +270,17 @@ fn observed(s: &Structure, table: &TableMotion, duration: f64, bandwidth: f64) -
             ts.table_accel_m_s2 as f32,
             (ts.top_accel_m_s2 + noise) as f32,
         );
-        peak = peak.max(ts.top_accel_m_s2.abs());
+        peak = max_finite(peak, ts.top_accel_m_s2.abs(), "truth |ü1|", k);
         let recent = events.get(next).is_some_and(|&(te, _)| te <= t);
         let e = if recent {
             0.0
         } else {
-            (y as f64 - ts.top_accel_m_s2).abs()
+            max_finite(
+                0.0,
+                (y as f64 - ts.top_accel_m_s2).abs(),
+                "observed error",
+                k,
+            )
         };
         if k < n / 10 {
             first = first.max(e);
@@ -302,4 +310,15 @@ fn the_observer_keeps_an_undamped_structure_bounded() {
     let (open_first, open_last) = observed(&s, &table, 2.0, 0.0);
     eprintln!("open loop: first tenth {open_first:.2e}, last tenth {open_last:.2e} of peak");
     assert!(open_last > 100.0 * last, "{open_first} {open_last}");
+}
+
+#[test]
+#[should_panic(expected = "estimator error at 3 is not finite: NaN")]
+fn a_nan_prediction_fails_the_error_maximum() {
+    // `f64::max` would keep 1e-3 and a bound of 1e-2 would pass.
+    let mut max_err = 1e-3;
+    for (k, y) in [0.5, 0.25, 0.125, f64::NAN].into_iter().enumerate() {
+        max_err = max_finite(max_err, (y - 0.5f64).abs(), "estimator error", k);
+    }
+    assert!(max_err <= 1e-2);
 }

@@ -8,6 +8,8 @@
 //! (1e-10 gμ, 1e-12 s) keep a margin of 50-300 and are far tighter than the 1e-4 gμ / 1e-5 s of the
 //! specification.
 
+mod common;
+use common::max_finite;
 use host_sim::table_motion::TableMotion;
 use host_sim::truth::{simulate, Direction, EventKind, TruthInput};
 use ssvr_core::{Structure, StructureParams};
@@ -256,13 +258,13 @@ fn compare(s: &Structure, mu_static: f64, table: &TableMotion, duration: f64) ->
     let mut dt_max = 0.0f64;
     for (e, (t, kind)) in truth.events().iter().zip(&reference.events) {
         assert_eq!(e.kind, *kind, "event kinds differ at {t}");
-        dt_max = dt_max.max((e.time_s - t).abs());
+        dt_max = max_finite(dt_max, (e.time_s - t).abs(), "event time error", t);
     }
     let mut cursor = truth.sampler();
     let mut da_max = 0.0f64;
     for &(t, a) in &reference.samples {
         let got = cursor.sample(t).expect("in range").top_accel_m_s2;
-        da_max = da_max.max((got - a).abs() / s.gmu());
+        da_max = max_finite(da_max, (got - a).abs() / s.gmu(), "ü1 error", t);
     }
     (da_max, dt_max, truth.events().len())
 }

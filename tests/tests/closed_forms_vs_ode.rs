@@ -12,6 +12,7 @@
 use ssvr_core::duhamel_closed_form::{DuhamelClosedForm, Reversal, ReversalTrain};
 use ssvr_core::fourier_series::FourierResponse;
 use ssvr_core::{Regime, Structure, StructureParams};
+use ssvr_integration_tests::finite::{finite_max, max_finite};
 use ssvr_integration_tests::ode::{ForceStep, State, Tolerance, TwoMassModel};
 use std::f64::consts::PI;
 
@@ -159,7 +160,7 @@ fn closed_form_vs_ode(s: &Structure, kind: TrainKind, tol: Tolerance) -> (f64, f
     for (&t, &want) in outputs.iter().zip(&ode.top_accel) {
         let got = cf.accel(&train, t);
         assert!(got.is_finite(), "closed form not finite at t = {t}");
-        let e = (got - want).abs() / s.gmu();
+        let e = max_finite(0.0, (got - want).abs() / s.gmu(), "|cf − ODE|", t);
         if e > worst {
             (worst, at) = (e, t);
         }
@@ -228,15 +229,14 @@ fn closed_form_is_continuous_across_critical_damping() {
             let s = structure(3.0, 1.0, xi);
             assert_eq!(s.regime(), regime, "xi = {xi}");
             let cf = DuhamelClosedForm::new(&s);
-            let worst = outputs
-                .iter()
-                .zip(&at_critical)
-                .map(|(&t, &c)| {
+            let worst = finite_max(
+                "difference from critical",
+                outputs.iter().zip(&at_critical).map(|(&t, &c)| {
                     let v = cf.accel(&train, t);
                     assert!(v.is_finite(), "xi = {xi}, t = {t}");
                     (v - c).abs() / s.gmu()
-                })
-                .fold(0.0f64, f64::max);
+                }),
+            );
             println!(
                 "{kind:?}: xi = 0.5 {:+.1e} ({regime:?}) vs critical: max diff/gmu = {worst:.2e}",
                 xi - 0.5
@@ -352,7 +352,7 @@ fn massless_base_limit_is_eq39() {
                 let t_last = jumps.last().map_or(f64::NEG_INFINITY, |&(tj, _)| tj);
                 if t - t_last > SETTLE {
                     checked += 1;
-                    let e = (v - gmu * level).abs() / gmu;
+                    let e = max_finite(0.0, (v - gmu * level).abs() / gmu, "|ü1 − gμ s|", t);
                     if e > worst {
                         (worst, worst_at) = (e, t);
                     }
@@ -360,7 +360,8 @@ fn massless_base_limit_is_eq39() {
                         .iter()
                         .map(|&(tj, dj)| dj * (-r1 * (t - tj)).exp())
                         .sum();
-                    worst_corr = worst_corr.max((v - gmu * (level + eps * corr)).abs() / gmu);
+                    let e = (v - gmu * (level + eps * corr)).abs() / gmu;
+                    worst_corr = max_finite(worst_corr, e, "|ü1 − corrected eq 39|", t);
                 }
             }
             println!(
@@ -407,10 +408,9 @@ fn peak_abs(f: impl Fn(f64) -> f64, t0: f64, period: f64, grid: usize) -> f64 {
                 lo = x1;
             }
         }
-        best = best
-            .max(f(0.5 * (lo + hi)).abs())
-            .max(f(lo).abs())
-            .max(f(hi).abs());
+        for t in [0.5 * (lo + hi), lo, hi] {
+            best = max_finite(best, f(t).abs(), "|ü1| near the peak", t);
+        }
     }
     best
 }
@@ -455,6 +455,7 @@ fn rfm_equals_rdm_steady_state() {
     for i in 0..n {
         let tau = i as f64 * PERIOD / n as f64;
         let e = (rdm(tau) - rfm.accel(tau, HARMONICS)).abs() / gmu;
+        let e = max_finite(0.0, e, "|RDM − RFM|", tau);
         if e > worst {
             (worst, worst_at) = (e, tau);
         }
@@ -508,12 +509,13 @@ fn rfm_is_the_alpha_to_zero_limit_of_tfm() {
             })
             .sum::<f64>()
             / gmu;
-        let worst = (0..1000)
-            .map(|i| {
+        let worst = finite_max(
+            "|TFM − RFM|",
+            (0..1000).map(|i| {
                 let t = i as f64 * PERIOD / 1000.0;
                 (tfm.accel(t, HARMONICS) - rfm.accel(t, HARMONICS)).abs() / gmu
-            })
-            .fold(0.0f64, f64::max);
+            }),
+        );
         (worst, coeff_bound)
     };
     let (d6, b6) = history_diff(1e-6);
@@ -637,10 +639,13 @@ fn errors(
     want: &[(State, f64)],
 ) -> (f64, f64, f64) {
     let (mut ea, mut eu, mut ev) = (0.0f64, 0.0f64, 0.0f64);
-    for ((y, acc), (yw, accw)) in got.iter().zip(got_acc).zip(want) {
-        ea = ea.max((acc - accw).abs() / gmu);
-        eu = eu.max((y[0] - yw[0]).abs().max((y[2] - yw[2]).abs()) / model.length_scale);
-        ev = ev.max((y[1] - yw[1]).abs().max((y[3] - yw[3]).abs()) / model.velocity_scale);
+    for (k, ((y, acc), (yw, accw))) in got.iter().zip(got_acc).zip(want).enumerate() {
+        ea = max_finite(ea, (acc - accw).abs() / gmu, "ü1 error", k);
+        let (l, v) = (model.length_scale, model.velocity_scale);
+        for i in [0, 2] {
+            eu = max_finite(eu, (y[i] - yw[i]).abs() / l, "displacement error", k);
+            ev = max_finite(ev, (y[i + 1] - yw[i + 1]).abs() / v, "velocity error", k);
+        }
     }
     (ea, eu, ev)
 }
@@ -734,12 +739,13 @@ fn integrator_matches_exact_solutions() {
             &outputs,
             Tolerance { rel: tol, abs: tol },
         );
-        let e = sol
-            .top_accel
-            .iter()
-            .zip(&exact)
-            .map(|(a, b)| (a - b).abs() / s.gmu())
-            .fold(0.0f64, f64::max);
+        let e = finite_max(
+            "|ODE − exact|",
+            sol.top_accel
+                .iter()
+                .zip(&exact)
+                .map(|(a, b)| (a - b).abs() / s.gmu()),
+        );
         println!(
             "undamped periodic train, 3 s, tolerance {tol:e}: max |ode - exact|/gmu = {e:.2e} \
              ({} steps)",
