@@ -9,23 +9,18 @@
 //! * the stick-slip model, which `model::choose` picks for both scenes (they stick): the f64
 //!   stick-slip estimator as the reference, μ̂ from the firmware.
 //!
-//! Needs `qemu-system-arm` (skipped with a message when missing) and the `thumbv7em-none-eabihf`
-//! target; the first run builds the firmware.
+//! Needs `qemu-system-arm` (or `$QEMU_SYSTEM_ARM`) and the `thumbv7em-none-eabihf` target; CI
+//! installs both. Without them the tests fail; `SSVR_SKIP_QEMU=1` skips them explicitly (each
+//! prints "SKIPPED"). The first run builds the firmware.
 
+mod common;
 use assert_cmd::Command;
+use common::qemu_tests_run;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
 fn scenes_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes")
-}
-
-fn qemu_available() -> bool {
-    let ok = host_sim::qemu_runner::qemu_available();
-    if !ok {
-        eprintln!("SKIPPED: qemu-system-arm not found (apt-get install -y qemu-system-arm)");
-    }
-    ok
 }
 
 /// A copy of `scenes/<name>` with `duration_s` replaced and record paths made absolute.
@@ -180,7 +175,7 @@ fn check_stick_slip(v: &Value, samples: u64) {
 
 #[test]
 fn qemu_command_rectangular_on_one_second_of_the_default_scene() {
-    if !qemu_available() {
+    if !qemu_tests_run() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
@@ -193,7 +188,7 @@ fn qemu_command_rectangular_on_one_second_of_the_default_scene() {
 
 #[test]
 fn qemu_command_rectangular_on_the_first_five_seconds_of_el_centro() {
-    if !qemu_available() {
+    if !qemu_tests_run() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
@@ -204,7 +199,7 @@ fn qemu_command_rectangular_on_the_first_five_seconds_of_el_centro() {
 
 #[test]
 fn qemu_command_stick_slip_on_two_seconds_of_the_default_scene() {
-    if !qemu_available() {
+    if !qemu_tests_run() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
@@ -227,7 +222,7 @@ fn qemu_command_stick_slip_on_two_seconds_of_the_default_scene() {
 
 #[test]
 fn qemu_command_stick_slip_on_the_first_five_seconds_of_el_centro() {
-    if !qemu_available() {
+    if !qemu_tests_run() {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
