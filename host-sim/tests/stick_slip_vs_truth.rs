@@ -110,8 +110,8 @@ fn follows_the_truth_through_stick_phases() {
         times_s: vec![0.0, 0.02, 0.04, 0.1, 0.5],
         accel_m_s2: vec![0.0, 0.3, -0.2, 0.1, 0.0],
     };
-    // (name, structure, table, μs, duration, f64 bound, f32 bound): bounds are measured values
-    // with margin. Harmonic input is sampled and interpolated linearly by the estimator (the truth
+    // (name, structure, table, μs, duration, f64 bound, f32 bound): bounds are the measured values
+    // (worst over the lags, in the comments) with a margin of 2-5. Harmonic input is sampled and interpolated linearly by the estimator (the truth
     // uses the exact sine): an O((ωΔt)²) input error, so harmonic cases are not exact; records are
     // piecewise linear and reproduced to rounding.
     let cases: Vec<(&str, &Structure, TableMotion, f64, f64, f64, f64)> = vec![
@@ -121,8 +121,8 @@ fn follows_the_truth_through_stick_phases() {
             small,
             0.2,
             1.0,
-            1e-10,
-            1e-5,
+            5e-12, // measured 1.4e-12
+            3e-6,  // measured 9.0e-7
         ),
         (
             "table 1, 2 m/s2",
@@ -130,8 +130,8 @@ fn follows_the_truth_through_stick_phases() {
             harmonic(2.0, 0.143),
             0.2,
             3.0,
-            5e-6,
-            1e-5,
+            5e-6, // measured 1.2e-6
+            1e-5, // measured 2.3e-6
         ),
         // μs > μ at resonance: the error dynamics under the event sequence grow (about ×2 per
         // 0.3 s): the interpolation error (∝ Δt², see @100k) and f32 rounding are amplified.
@@ -141,8 +141,8 @@ fn follows_the_truth_through_stick_phases() {
             harmonic(2.0, 0.143),
             0.25,
             3.0,
-            2e-3,
-            0.1,
+            2e-3, // measured 7.4e-4
+            5e-3, // measured 2.0e-3
         ),
         (
             "table 1, mu_s 0.25 @100k",
@@ -150,8 +150,8 @@ fn follows_the_truth_through_stick_phases() {
             harmonic(2.0, 0.143),
             0.25,
             3.0,
-            2e-5,
-            0.2,
+            2e-5, // measured 7.6e-6
+            3e-2, // measured 1.2e-2
         ),
         (
             "table 2 test 2",
@@ -159,10 +159,11 @@ fn follows_the_truth_through_stick_phases() {
             harmonic(1.255, 0.2),
             0.2,
             4.0,
-            5e-6,
-            1e-5,
+            2e-6, // measured 6.5e-7
+            1e-5, // measured 3.3e-6
         ),
-        ("el centro 15 s", &t1, record, 0.25, 15.0, 1e-10, 1e-5),
+        // Measured f64 2.4e-12, f32 2.5e-6.
+        ("el centro 15 s", &t1, record, 0.25, 15.0, 1e-11, 1e-5),
     ];
     for (name, s, table, mu_s, dur, b64, b32) in &cases {
         let rate = if name.ends_with("@100k") { 1e5 } else { 1e4 };
@@ -224,13 +225,16 @@ fn identifies_the_friction_coefficient() {
     for (truth_mu, model_mu) in [(0.2, 0.2), (0.17, 0.2), (0.23, 0.2)] {
         let (mu, std, n) = identify(truth_mu, model_mu, &table, 8.0);
         println!(
-            "true mu {truth_mu}, model {model_mu}: mu_hat {mu:.5} ± {std:.5} from {n} samples"
+            "true mu {truth_mu}, model {model_mu}: mu_hat {mu:.7} ± {std:.2e} from {n} samples \
+             ({:.2e} relative)",
+            mu / truth_mu - 1.0
         );
+        // Measured: ≤ 1.05e-4 relative, std ≤ 1.1e-4 of μ.
         assert!(
-            (mu / truth_mu - 1.0).abs() < 0.02,
+            (mu / truth_mu - 1.0).abs() < 3e-4,
             "mu_hat {mu} vs {truth_mu}"
         );
-        assert!(std > 0.0 && std < 0.02 * truth_mu);
+        assert!(std > 0.0 && std < 3e-4 * truth_mu, "std {std}");
     }
 }
 

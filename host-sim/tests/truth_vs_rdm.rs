@@ -137,9 +137,11 @@ fn continuous_sliding_matches_rdm_plus_free_vibration() {
         "max |ü1_truth − ü1_RDM − ü1_free| = {:.3e} gμ (at t = {:.6} s); without the free term {:.3e} gμ",
         worst.0, worst.1, worst_no_free
     );
-    assert!(worst.0 < 1e-9, "{worst:?}");
-    // The stuck phase's legacy is not negligible: the comparison needs the free term.
-    assert!(worst_no_free > 1e-3, "{worst_no_free}");
+    // Measured 1.0e-13 gμ.
+    assert!(worst.0 < 5e-13, "{worst:?}");
+    // The stuck phase's legacy is not negligible: the comparison needs the free term (measured
+    // 1.85 gμ without it).
+    assert!(worst_no_free > 0.5, "{worst_no_free}");
 }
 
 #[test]
