@@ -94,23 +94,26 @@ fn bench_quick_json_rows_are_complete_and_sane() {
             r["scene"] == "harmonic" && r["method"] == "rdm-recursion" && r["precision"] == "f64"
         })
         .expect("the f64 recursion on the harmonic scene");
-    assert!(num(f64_h, "max_err_gmu") <= 1e-10, "{f64_h}");
+    // Measured (--quick): f64 1.2e-13, F32Poly 3.8e-7 on the harmonic scene, 1.4e-6 on the long
+    // train.
+    assert!(num(f64_h, "max_err_gmu") <= 5e-13, "{f64_h}");
     let fw = row(
         rows,
         "harmonic",
         "rdm-recursion",
         "F32Poly (firmware default)",
     );
-    assert!(num(fw, "max_err_gmu") <= 1e-5, "{fw}");
+    assert!(num(fw, "max_err_gmu") <= 1e-6, "{fw}");
     let fw_long = row(
         rows,
         "long-train",
         "rdm-recursion",
         "F32Poly (firmware default)",
     );
-    assert!(num(fw_long, "max_err_gmu") <= 1e-5, "{fw_long}");
+    assert!(num(fw_long, "max_err_gmu") <= 3e-6, "{fw_long}");
     // The full closed form is the reference; RFM converges to it; truncation works only with
-    // damping.
+    // damping. Measured (--quick): RFM 6.4e-3 at H=81 against 1.26 at H=1 (ratio 5.1e-3); K=32 0
+    // and K=16 2.3e-16 on the harmonic scene; K=32 1.01 on the undamped long train.
     assert_eq!(
         num(
             row(rows, "harmonic", "rdm-closed", "full sum"),
@@ -120,19 +123,19 @@ fn bench_quick_json_rows_are_complete_and_sane() {
     );
     assert!(
         num(row(rows, "harmonic", "rfm", "H=81"), "max_err_gmu")
-            < 0.1 * num(row(rows, "harmonic", "rfm", "H=1"), "max_err_gmu")
+            < 0.01 * num(row(rows, "harmonic", "rfm", "H=1"), "max_err_gmu")
     );
     assert!(
         num(
             row(rows, "harmonic", "rdm-truncated", "K=32"),
             "max_err_gmu"
-        ) <= 1e-12
+        ) <= 1e-15
     );
     assert!(
         num(
             row(rows, "long-train", "rdm-truncated", "K=32"),
             "max_err_gmu"
-        ) >= 0.1
+        ) >= 0.5
     );
     // Model errors: the truth is its own reference.
     assert_eq!(

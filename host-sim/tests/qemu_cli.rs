@@ -117,8 +117,9 @@ fn check_rectangular(v: &Value, samples: u64) {
     check_common(v, samples);
     assert_eq!(v["model"], "rectangular");
     assert_eq!(v["mu_estimate"], Value::Null);
-    // The f32 recursion against the f64 closed form on the same (detected) train.
-    assert!(num(v, "max_err_vs_reference_gmu") < 1e-5);
+    // The f32 recursion against the f64 closed form on the same (detected) train (measured 3.3e-7
+    // gμ on the default scene, 3.4e-7 gμ on El Centro).
+    assert!(num(v, "max_err_vs_reference_gmu") < 1e-6, "{v}");
     let ips = num(v, "instructions_per_sample");
     assert!(ips > 5.0 && ips <= 20.0, "instructions per sample {ips}");
     assert!(num(v, "instructions_per_reversal") > 0.0);
