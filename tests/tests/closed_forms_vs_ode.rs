@@ -208,14 +208,18 @@ fn closed_form_equals_ode_in_all_regimes() {
 
 #[test]
 fn closed_form_is_continuous_across_critical_damping() {
+    // (ξ, regime, bound on the difference from critical): measured 4.5e-10 gμ at ξ = 0.5 ∓ 2.5e-10
+    // (the true change of the response with ξ) and 2.0e-15 at ξ = 0.5 ∓ 1e-15.
     const TOL: f64 = 1e-9;
+    // Each side against the ODE of its own ξ: measured ≤ 1.0e-12.
+    const ODE_TOL: f64 = 3e-12;
     let critical = structure(3.0, 1.0, 0.5);
     assert_eq!(critical.regime(), Regime::Critical);
     let neighbours = [
-        (0.5 - 2.5e-10, Regime::Underdamped),
-        (0.5 + 2.5e-10, Regime::Overdamped),
-        (0.5 - 1e-15, Regime::Underdamped),
-        (0.5 + 1e-15, Regime::Overdamped),
+        (0.5 - 2.5e-10, Regime::Underdamped, TOL),
+        (0.5 + 2.5e-10, Regime::Overdamped, TOL),
+        (0.5 - 1e-15, Regime::Underdamped, 1e-14),
+        (0.5 + 1e-15, Regime::Overdamped, 1e-14),
     ];
     let irregular = irregular_reversals();
     for kind in [TrainKind::Periodic, TrainKind::Irregular] {
@@ -225,7 +229,7 @@ fn closed_form_is_continuous_across_critical_damping() {
             let cf = DuhamelClosedForm::new(&critical);
             outputs.iter().map(|&t| cf.accel(&train, t)).collect()
         };
-        for (xi, regime) in neighbours {
+        for (xi, regime, bound) in neighbours {
             let s = structure(3.0, 1.0, xi);
             assert_eq!(s.regime(), regime, "xi = {xi}");
             let cf = DuhamelClosedForm::new(&s);
@@ -241,7 +245,7 @@ fn closed_form_is_continuous_across_critical_damping() {
                 "{kind:?}: xi = 0.5 {:+.1e} ({regime:?}) vs critical: max diff/gmu = {worst:.2e}",
                 xi - 0.5
             );
-            assert!(worst <= TOL, "{kind:?} xi = {xi}: {worst:e}");
+            assert!(worst <= bound, "{kind:?} xi = {xi}: {worst:e}");
         }
         // Each side also matches the ODE of its own ξ.
         for xi in [0.5 - 2.5e-10, 0.5 + 2.5e-10] {
@@ -251,7 +255,7 @@ fn closed_form_is_continuous_across_critical_damping() {
                 "{kind:?}: xi = 0.5 {:+.1e} vs ODE: {err:.2e} at t = {at:.6}",
                 xi - 0.5
             );
-            assert!(err <= TOL, "{kind:?} xi = {xi}: {err:e} at {at}");
+            assert!(err <= ODE_TOL, "{kind:?} xi = {xi}: {err:e} at {at}");
         }
     }
 }
@@ -300,8 +304,9 @@ fn massless_base_limit_is_eq39() {
     // The leading correction, typed from the transfer function in docs/equations.md: the slow pole
     // r1 = p/(2ξ)·(1 + ε), ε = 1/(4Mξ²), nearly cancels the zero at p/(2ξ) and leaves the residue ε,
     // so ü1 = gμ [s(t) + ε Σ_j Δs_j e^{−r1 (t − t_j)}] + O(ε², r1/(2a)). Checking this to 1e-10·gμ
-    // shows the closed form is accurate far beyond the 1e-6 of eq (39) itself.
-    const TOL_CORRECTED: f64 = 1e-10;
+    // shows the closed form is accurate far beyond the 1e-6 of eq (39) itself (measured 6.0e-14 at
+    // ξ = 0.05, 2.3e-16 at ξ = 0.3; eq 39 itself 2.0e-7).
+    const TOL_CORRECTED: f64 = 3e-13;
     for xi in [0.05, 0.3] {
         let s = structure(1.0, 1e-9, xi);
         let gmu = s.gmu();
@@ -470,9 +475,10 @@ fn rfm_equals_rdm_steady_state() {
          {worst:.2e} at tau = {worst_at:.6} s (truncation bound {tail:.2e}); away from \
          reversals {worst_interior:.2e}"
     );
+    // Measured: 2.84e-5 (at a reversal, the truncation bound 2.85e-5), 1.0e-12 away from reversals.
     assert!(worst <= tail + 1e-9, "{worst:e} > bound {tail:e}");
     assert!(worst <= 5e-5, "{worst:e}");
-    assert!(worst_interior <= 1e-6, "{worst_interior:e}");
+    assert!(worst_interior <= 5e-12, "{worst_interior:e}");
 
     // Peak.
     let peak_rdm = peak_abs(rdm, 0.0, PERIOD, 4000);
@@ -485,8 +491,9 @@ fn rfm_equals_rdm_steady_state() {
          RFM converged ({h_conv} harmonics) {peak_conv:.12} (rel {rel_conv:.2e})",
         peak_rdm / gmu
     );
-    assert!(rel <= 1e-6, "{rel:e}");
-    assert!(rel_conv <= 1e-5, "{rel_conv:e}");
+    // Measured: 4.9e-10 at 20 000 harmonics, 1.8e-7 converged (512 harmonics).
+    assert!(rel <= 2e-9, "{rel:e}");
+    assert!(rel_conv <= 5e-7, "{rel_conv:e}");
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -537,7 +544,8 @@ fn rfm_is_the_alpha_to_zero_limit_of_tfm() {
         .peak(HARMONICS);
     let rel = (p_tfm - p_rfm).abs() / p_rfm;
     println!("peak: RFM {p_rfm:.12}, TFM(1e-6) {p_tfm:.12}, rel {rel:.2e}");
-    assert!(rel <= 1e-9, "{rel:e}");
+    // Measured 1.7e-12.
+    assert!(rel <= 5e-12, "{rel:e}");
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -680,7 +688,8 @@ fn integrator_matches_exact_solutions() {
              ({} steps, {} rejected)",
             sol.accepted_steps, sol.rejected_steps
         );
-        assert!(ea <= TOL && eu <= 1e-8 && ev <= 1e-8, "{name}");
+        // Measured: ü1 ≤ 3.7e-11 gμ, u ≤ 1.0e-10 L, v ≤ 1.5e-11 L·ω0.
+        assert!(ea <= TOL && eu <= 3e-10 && ev <= 5e-11, "{name}");
     }
 
     // (b) Free vibration from an arbitrary absolute state, 10 s (≈ 300 cycles undamped).
