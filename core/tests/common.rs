@@ -6,6 +6,24 @@ use ssvr_core::math::{Real, Transcendentals};
 use ssvr_core::recursion::{DuhamelRecursion, TrainFeeder};
 use ssvr_core::{Structure, StructureParams};
 
+/// `acc.max(value)`, failing on a non-finite `value`: `f64::max` drops NaN (`a.max(NaN) == a`), so an
+/// estimator returning NaN would pass a bound checked on a plain running maximum. The panic message
+/// names the quantity (`what`) and where it occurred (`at`: a sample index, a time, a case).
+#[track_caller]
+pub fn max_finite(acc: f64, value: f64, what: &str, at: impl std::fmt::Display) -> f64 {
+    assert!(value.is_finite(), "{what} at {at} is not finite: {value}");
+    acc.max(value)
+}
+
+/// The maximum of `values` (0 when empty), failing on any non-finite one (reported with its
+/// position in `values`).
+#[track_caller]
+pub fn finite_max(what: &str, values: impl IntoIterator<Item = f64>) -> f64 {
+    values.into_iter().enumerate().fold(0.0, |m, (i, v)| {
+        max_finite(m, v, what, format_args!("index {i}"))
+    })
+}
+
 pub fn structure(m1: f64, m2: f64, f_hz: f64, xi: f64) -> Structure {
     Structure::new(StructureParams {
         m1_kg: m1,
@@ -58,7 +76,12 @@ pub fn run<T: Real, M: Transcendentals<T>, const K: usize>(
         if k % stride == 0 || k <= near_until || next_soon || k + 1000 >= n {
             let t = k as f64 / rate;
             let want = cf.accel(train, t);
-            peak = peak.max(want.abs());
+            peak = max_finite(
+                peak,
+                want.abs(),
+                "closed form |ü1|",
+                format_args!("sample {k}"),
+            );
             errs.push((k, (y - want).abs()));
         }
     }
@@ -67,12 +90,13 @@ pub fn run<T: Real, M: Transcendentals<T>, const K: usize>(
     let max_in = |lo: u64, hi: u64| {
         errs.iter()
             .filter(|(k, _)| *k >= lo && *k < hi)
-            .map(|e| e.1)
-            .fold(0.0f64, f64::max)
+            .fold(0.0, |m, &(k, e)| {
+                max_finite(m, e, "recursion error", format_args!("sample {k}"))
+            })
             / scale
     };
     RunErrors {
-        max: errs.iter().map(|e| e.1).fold(0.0, f64::max) / scale,
+        max: max_in(0, n),
         rms: (errs.iter().map(|e| e.1 * e.1).sum::<f64>() / errs.len() as f64).sqrt() / scale,
         first_tenth: max_in(0, tenth),
         last_tenth: max_in(n - tenth, n),

@@ -48,8 +48,8 @@ fn naive_max_error(
         let y = (level * gmu) as f32 + w0;
         if i % stride == 0 {
             let want = cf.accel(train, t);
-            peak = peak.max(want.abs());
-            max_err = max_err.max((y as f64 - want).abs());
+            peak = max_finite(peak, want.abs(), "closed form |ü1|", i);
+            max_err = max_finite(max_err, (y as f64 - want).abs(), "naive error", i);
         }
         let (a, b) = (psi[0] * w0 + psi[1] * w1, psi[2] * w0 + psi[3] * w1);
         w0 = a;

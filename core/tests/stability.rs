@@ -1,12 +1,17 @@
 //! The stability suite of the Duhamel recursion against the generalised eq (36) in f64.
-//! Bounds: max error / max(gμ, peak |ü1|) ≤ 1e-5 in f32 and ≤ 1e-10 in f64 on every case.
+//! Specification: max error / max(gμ, peak |ü1|) ≤ 1e-5 in f32 and ≤ 1e-10 in f64 on every case.
+//! Asserted, a small margin over the measured worst case: ≤ 2e-6 in f32 (measured ≤ 6.4e-7, the
+//! undamped 10^6-sample run; 3.3e-7 with late detections) and ≤ 1e-10 in f64 (measured ≤ 3.0e-11).
 mod common;
 use common::*;
 use ssvr_core::closed_form::duhamel::ReversalTrain;
 use ssvr_core::math::{F32Poly, Libm, Micromath};
 use ssvr_core::Structure;
 
+/// The f32 specification (micromath misses it: `micromath_switch_is_measured`).
 const F32_BOUND: f64 = 1e-5;
+/// What libm and F32Poly are held to: measured ≤ 6.4e-7 over the suite.
+const F32_MEASURED_BOUND: f64 = 2e-6;
 const F64_BOUND: f64 = 1e-10;
 
 fn both(name: &str, s: &Structure, rate: f64, train: &ReversalTrain<'_>, n: u64, stride: u64) {
@@ -17,8 +22,16 @@ fn both(name: &str, s: &Structure, rate: f64, train: &ReversalTrain<'_>, n: u64,
         "{name}: f32 max {:.3e} rms {:.3e} (first tenth {:.3e}, last {:.3e}); f32 poly max {:.3e}; f64 max {:.3e} rms {:.3e}; {} compared",
         e32.max, e32.rms, e32.first_tenth, e32.last_tenth, em.max, e64.max, e64.rms, e64.compared
     );
-    assert!(e32.max <= F32_BOUND, "{name}: f32 error {:e}", e32.max);
-    assert!(em.max <= F32_BOUND, "{name}: f32 poly error {:e}", em.max);
+    assert!(
+        e32.max <= F32_MEASURED_BOUND,
+        "{name}: f32 error {:e}",
+        e32.max
+    );
+    assert!(
+        em.max <= F32_MEASURED_BOUND,
+        "{name}: f32 poly error {:e}",
+        em.max
+    );
     assert!(e64.max <= F64_BOUND, "{name}: f64 error {:e}", e64.max);
 }
 
@@ -170,7 +183,8 @@ fn error_does_not_grow_with_run_length() {
 #[test]
 fn micromath_switch_is_measured() {
     // micromath's sin/cos/exp approximations are off by ~1e-4..1e-3: they miss the f32 bound as soon
-    // as reversals fall between samples. Recorded here so docs/PERFORMANCE.md stays true.
+    // as reversals fall between samples. Recorded here so docs/PERFORMANCE.md stays true
+    // (measured 1.67e-4).
     let s = table1(0.05);
     let e = run::<f32, Micromath, 256>(&s, 1e4, &paper_train(0.07151), 100_000, 1);
     println!(
@@ -178,7 +192,7 @@ fn micromath_switch_is_measured() {
         e.max, e.rms
     );
     assert!(
-        e.max > F32_BOUND && e.max < 1e-2,
+        e.max > F32_BOUND && e.max < 5e-4,
         "micromath error {:e}",
         e.max
     );
@@ -224,15 +238,35 @@ fn late_detections_are_back_dated() {
                 .map_or(0.0, |j| train.get(j).unwrap().time_s);
             if t - last >= lag / rate || t < 0.0 {
                 let want = cf.accel(&train, t);
-                max_l = max_l.max((yl - want).abs() / s.gmu());
-                max_m = max_m.max((ym - want).abs() / s.gmu());
-                max_u = max_u.max((yu - want).abs() / s.gmu());
+                let err = |y: f64| (y - want).abs() / s.gmu();
+                max_l = max_finite(max_l, err(yl), label, format_args!("libm, sample {k}"));
+                max_m = max_finite(max_m, err(ym), label, format_args!("f32 poly, sample {k}"));
+                max_u = max_finite(max_u, err(yu), label, format_args!("micromath, sample {k}"));
             }
         }
         println!("{label} samples: libm {max_l:.3e}, f32 poly {max_m:.3e}, micromath {max_u:.3e}");
+        // Measured: libm and F32Poly ≤ 3.3e-7 at every lag.
         assert!(
-            max_l <= F32_BOUND && max_m <= F32_BOUND,
+            max_l <= F32_MEASURED_BOUND && max_m <= F32_MEASURED_BOUND,
             "{label}: {max_l:e} {max_m:e}"
         );
     }
+}
+
+#[test]
+#[should_panic(expected = "recursion error at index 2 is not finite: NaN")]
+fn a_nan_error_fails_the_maximum() {
+    // `f64::max` would return 1e-9 here and the bound would pass.
+    finite_max("recursion error", [1e-9, 0.0, f64::NAN, 1e-12]);
+}
+
+#[test]
+#[should_panic(expected = "f32 poly error at sample 7 is not finite: inf")]
+fn an_infinite_error_fails_the_running_maximum() {
+    max_finite(
+        1e-9,
+        f64::INFINITY,
+        "f32 poly error",
+        format_args!("sample {}", 7),
+    );
 }

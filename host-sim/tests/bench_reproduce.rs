@@ -1,5 +1,9 @@
 //! `host-sim bench --quick --json` and `host-sim reproduce --quick`: contracts and sanity.
+//!
+//! The bench's M4F column is measured under QEMU: `qemu-system-arm` must be installed (CI installs
+//! it), or the test fails; `SSVR_SKIP_QEMU=1` skips that one check explicitly.
 
+mod common;
 use assert_cmd::Command;
 use serde_json::Value;
 use std::path::Path;
@@ -61,8 +65,8 @@ fn bench_quick_json_rows_are_complete_and_sane() {
             "{r}"
         );
     }
-    // The firmware recursion's M4F count, measured under QEMU when it is installed.
-    if host_sim::qemu_runner::qemu_available() {
+    // The firmware recursion's M4F count, measured under QEMU (required unless SSVR_SKIP_QEMU=1).
+    if common::qemu_tests_run() {
         for r in rows.iter().filter(|r| {
             r["method"] == "rdm-recursion" && r["setting"] == "F32Poly (firmware default)"
         }) {
@@ -90,23 +94,26 @@ fn bench_quick_json_rows_are_complete_and_sane() {
             r["scene"] == "harmonic" && r["method"] == "rdm-recursion" && r["precision"] == "f64"
         })
         .expect("the f64 recursion on the harmonic scene");
-    assert!(num(f64_h, "max_err_gmu") <= 1e-10, "{f64_h}");
+    // Measured (--quick): f64 1.2e-13, F32Poly 3.8e-7 on the harmonic scene, 1.4e-6 on the long
+    // train.
+    assert!(num(f64_h, "max_err_gmu") <= 5e-13, "{f64_h}");
     let fw = row(
         rows,
         "harmonic",
         "rdm-recursion",
         "F32Poly (firmware default)",
     );
-    assert!(num(fw, "max_err_gmu") <= 1e-5, "{fw}");
+    assert!(num(fw, "max_err_gmu") <= 1e-6, "{fw}");
     let fw_long = row(
         rows,
         "long-train",
         "rdm-recursion",
         "F32Poly (firmware default)",
     );
-    assert!(num(fw_long, "max_err_gmu") <= 1e-5, "{fw_long}");
+    assert!(num(fw_long, "max_err_gmu") <= 3e-6, "{fw_long}");
     // The full closed form is the reference; RFM converges to it; truncation works only with
-    // damping.
+    // damping. Measured (--quick): RFM 6.4e-3 at H=81 against 1.26 at H=1 (ratio 5.1e-3); K=32 0
+    // and K=16 2.3e-16 on the harmonic scene; K=32 1.01 on the undamped long train.
     assert_eq!(
         num(
             row(rows, "harmonic", "rdm-closed", "full sum"),
@@ -116,19 +123,19 @@ fn bench_quick_json_rows_are_complete_and_sane() {
     );
     assert!(
         num(row(rows, "harmonic", "rfm", "H=81"), "max_err_gmu")
-            < 0.1 * num(row(rows, "harmonic", "rfm", "H=1"), "max_err_gmu")
+            < 0.01 * num(row(rows, "harmonic", "rfm", "H=1"), "max_err_gmu")
     );
     assert!(
         num(
             row(rows, "harmonic", "rdm-truncated", "K=32"),
             "max_err_gmu"
-        ) <= 1e-12
+        ) <= 1e-15
     );
     assert!(
         num(
             row(rows, "long-train", "rdm-truncated", "K=32"),
             "max_err_gmu"
-        ) >= 0.1
+        ) >= 0.5
     );
     // Model errors: the truth is its own reference.
     assert_eq!(
@@ -138,13 +145,8 @@ fn bench_quick_json_rows_are_complete_and_sane() {
         ),
         0.0
     );
-    // The recursion is much faster than the full sum on the long train (loose: timing on a
-    // shared machine).
-    let closed = num(
-        row(rows, "long-train", "rdm-closed", "full sum"),
-        "ns_per_sample",
-    );
-    assert!(closed / num(fw_long, "ns_per_sample") > 30.0);
+    // The speed-up of the recursion over the full sum is counted, not timed:
+    // `long_train_work_is_counted` below.
 
     for f in [
         "bench.json",
@@ -159,6 +161,49 @@ fn bench_quick_json_rows_are_complete_and_sane() {
             "{}",
             p.display()
         );
+    }
+}
+
+/// Work per sample on the bench's long reversal train, counted: (the full closed form's kernel
+/// terms per compared sample, the recursion's steps per sample). The full sum evaluates one kernel
+/// term (exponential, sine and cosine) per past reversal at every sample (undamped: none is
+/// dropped); the recursion does one table step per sample plus one kernel evaluation per reversal.
+fn long_train_work(quick: bool) -> (f64, f64) {
+    use ssvr_core::duhamel_closed_form::{DuhamelClosedForm, ReversalTrain};
+    let scenes = host_sim::report::bench::scenes(quick).unwrap();
+    let sc = scenes.iter().find(|s| s.id == "long-train").unwrap();
+    let train = ReversalTrain::Explicit(&sc.train);
+    let cf = DuhamelClosedForm::new(&sc.structure);
+    let terms: usize = sc
+        .eval
+        .iter()
+        .map(|&k| cf.evaluate(&train, k as f64 / sc.rate_hz, usize::MAX).terms)
+        .sum();
+    let closed = terms as f64 / sc.eval.len() as f64;
+    let recursion = (sc.samples + sc.train.len() as u64) as f64 / sc.samples as f64;
+    (closed, recursion)
+}
+
+/// The recursion's advantage over the full closed-form sum on the long train, as operation counts
+/// (the project never puts a timing inside a test). Measured, and exact: 500.5 kernel terms per
+/// compared sample for the full sum against 1 + 1/715 steps per sample for the recursion with
+/// `--quick` (10^3 reversals, ratio 499.8), 5000.5 against the same with the full bench (10^4
+/// reversals, ratio 4994, the goal being ≥ 1000). docs/PERFORMANCE.md's 5.7·10^4× (full bench,
+/// host ns per sample: 90 µs against 1.6 ns) is this ratio times the cost of one kernel term
+/// (~18 ns) over one table step (~1.6 ns).
+#[test]
+fn long_train_work_is_counted() {
+    let steps = 1.0 + 1.0 / 715.0; // a reversal every 0.0715 s at 10 kHz
+    for (quick, terms, ratio_min) in [(true, 500.5, 499.0), (false, 5000.5, 4990.0)] {
+        let (closed, recursion) = long_train_work(quick);
+        let ratio = closed / recursion;
+        println!(
+            "long-train (quick {quick}): full sum {closed} terms per sample, recursion {recursion} \
+             steps per sample, ratio {ratio:.1}"
+        );
+        assert_eq!(closed, terms, "quick {quick}");
+        assert!((recursion / steps - 1.0).abs() < 1e-12, "{recursion}");
+        assert!(ratio >= ratio_min, "quick {quick}: {ratio}");
     }
 }
 

@@ -1,5 +1,6 @@
 //! Command-line tests of `host-sim` on scenes written to temporary files.
 
+mod common;
 use assert_cmd::Command;
 use std::path::{Path, PathBuf};
 
@@ -183,13 +184,18 @@ fn trace_header_stride_and_precision() {
         "--stride",
         "7",
     ]);
+    let (mut d64, mut d32) = (0.0f64, 0.0f64);
     for ((a, b), c) in closed.lines().zip(rec.lines()).zip(rec32.lines()).skip(1) {
         let ((ta, ya), (tb, yb), (tc, yc)) = (row(a), row(b), row(c));
         assert_eq!(ta, tb);
         assert_eq!(ta, tc);
-        assert!((ya - yb).abs() < 1e-9, "{a} vs {b}");
-        assert!((ya - yc).abs() < 1e-4, "{a} vs {c}");
+        d64 = common::max_finite(d64, (ya - yb).abs(), "f64 recursion − closed form", ta);
+        d32 = common::max_finite(d32, (ya - yc).abs(), "f32 recursion − closed form", ta);
     }
+    println!("trace: max |recursion − closed form| f64 {d64:.2e} m/s², f32 {d32:.2e} m/s²");
+    // Measured 6.2e-15 and 2.4e-7 m/s².
+    assert!(d64 < 3e-14, "{d64}");
+    assert!(d32 < 1e-6, "{d32}");
     // TFM/RFM traces, to a file.
     let out = dir.path().join("tfm.csv");
     run(&[
@@ -243,7 +249,10 @@ fn check_json_fields() {
         assert_eq!(v["precision"], precision);
         let max = v["max_err_gmu"].as_f64().unwrap();
         let rms = v["rms_err_gmu"].as_f64().unwrap();
-        assert!(rms <= max && max < 1e-4, "{max} {rms}");
+        println!("check {precision}: max {max:.2e} gμ, rms {rms:.2e} gμ");
+        // Measured: f32 2.3e-7 gμ, f64 3.6e-15 gμ.
+        let bound = if precision == "f32" { 1e-6 } else { 2e-14 };
+        assert!(rms <= max && max < bound, "{max} {rms}");
         let at = v["max_err_at_s"].as_f64().unwrap();
         assert!((0.0..0.5).contains(&at));
     }

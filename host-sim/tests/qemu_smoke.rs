@@ -8,29 +8,24 @@
 //! * the log-reversal test hook (header option `LOG_REVERSALS`): given reversals;
 //! * exit statuses of bad logs (header not matching the compiled-in scene: 7).
 //!
-//! Needs `qemu-system-arm` (skipped with a message when it is missing) and the
-//! `thumbv7em-none-eabihf` target. The first run builds the firmware (a minute or so).
+//! Needs `qemu-system-arm` (or `$QEMU_SYSTEM_ARM`) and the `thumbv7em-none-eabihf` target; CI
+//! installs both. Without them the tests fail; `SSVR_SKIP_QEMU=1` skips them explicitly (each
+//! prints "SKIPPED"). The first run builds the firmware (a minute or so).
 //!
 //! Run: `cargo test -p host-sim --test qemu_smoke -- --nocapture` (prints instruction counts and
 //! sizes).
 
+mod common;
+use common::qemu_tests_run;
 use host_sim::model::Model;
 use host_sim::qemu_cmd::{host_frames, host_run, DetectorSetup, HostFrame};
-use host_sim::qemu_runner::{
+use host_sim::qemu::image::{
     self, event_kind, frame_flags as ff, LogHeader, LogReversal, LogSample, SampleFrame,
     OPTION_LOG_REVERSALS,
 };
 use host_sim::scene::Scene;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
-
-fn skip() -> bool {
-    if qemu_runner::qemu_available() {
-        return false;
-    }
-    eprintln!("SKIPPED: qemu-system-arm not found (apt-get install -y qemu-system-arm)");
-    true
-}
 
 /// Build the image for the default scene into `dir`; returns the ELF.
 fn build(dir: &Path) -> PathBuf {
@@ -110,7 +105,7 @@ fn slip(t: f64) -> f64 {
 
 #[test]
 fn qemu_image_runs_the_detector_like_the_host() {
-    if skip() {
+    if !qemu_tests_run() {
         return;
     }
     let scene = Scene::default_scene();
@@ -275,7 +270,7 @@ fn hook_samples() -> Vec<LogSample> {
 
 #[test]
 fn qemu_image_log_reversal_hook_feeds_the_estimator() {
-    if skip() {
+    if !qemu_tests_run() {
         return;
     }
     let scene = Scene::default_scene();
@@ -331,7 +326,7 @@ fn qemu_image_log_reversal_hook_feeds_the_estimator() {
 /// host's.
 #[test]
 fn qemu_image_stick_slip_model_matches_the_host() {
-    if skip() {
+    if !qemu_tests_run() {
         return;
     }
     let scene = Scene::default_scene();
@@ -513,7 +508,7 @@ fn firmware_scene_file_round_trips_the_scene() {
 
 #[test]
 fn qemu_image_exit_status_names_bad_logs() {
-    if skip() {
+    if !qemu_tests_run() {
         return;
     }
     let scene = Scene::default_scene();

@@ -16,6 +16,8 @@
 //! RDM does not model. The free-vibration remainder is computed here from the textbook underdamped
 //! formula, independently of the library kernel.
 
+mod common;
+use common::max_finite;
 use host_sim::table_motion::TableMotion;
 use host_sim::truth::{simulate, EventKind, Phase, TruthInput};
 use ssvr_core::closed_form::duhamel::DuhamelClosedForm;
@@ -103,11 +105,17 @@ fn continuous_sliding_matches_rdm_plus_free_vibration() {
     let mut check = |t: f64| {
         let truth_a = truth.sample(t).unwrap().top_accel_m_s2;
         let rdm_a = rdm.accel(&rt, t);
-        let err = (truth_a - rdm_a - free(t - t_s)).abs() / gmu;
+        let err = max_finite(
+            0.0,
+            (truth_a - rdm_a - free(t - t_s)).abs() / gmu,
+            "error",
+            t,
+        );
         if err > worst.0 {
             worst = (err, t);
         }
-        worst_no_free = worst_no_free.max((truth_a - rdm_a).abs() / gmu);
+        let e = (truth_a - rdm_a).abs() / gmu;
+        worst_no_free = max_finite(worst_no_free, e, "error without the free term", t);
     };
     let mut k = 0;
     loop {
@@ -129,9 +137,11 @@ fn continuous_sliding_matches_rdm_plus_free_vibration() {
         "max |ü1_truth − ü1_RDM − ü1_free| = {:.3e} gμ (at t = {:.6} s); without the free term {:.3e} gμ",
         worst.0, worst.1, worst_no_free
     );
-    assert!(worst.0 < 1e-9, "{worst:?}");
-    // The stuck phase's legacy is not negligible: the comparison needs the free term.
-    assert!(worst_no_free > 1e-3, "{worst_no_free}");
+    // Measured 1.0e-13 gμ.
+    assert!(worst.0 < 5e-13, "{worst:?}");
+    // The stuck phase's legacy is not negligible: the comparison needs the free term (measured
+    // 1.85 gμ without it).
+    assert!(worst_no_free > 0.5, "{worst_no_free}");
 }
 
 #[test]

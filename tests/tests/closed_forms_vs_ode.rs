@@ -5,13 +5,14 @@
 //!   in all damping regimes, for the paper's periodic train and an irregular train with stuck phases.
 //! * Continuity of the closed form across Mξ² = 1, the m2 → 0 limit (eq 39), RFM = RDM steady state
 //!   ("(20) equals (36)"), RFM = lim_{α→0} TFM.
-//! * The integrator itself against exact solutions typed from the physics notes.
+//! * The integrator itself against exact solutions typed from docs/equations.md.
 //!
 //! Every error is reported relative to gμ. Run with `--nocapture` to see the measured numbers.
 
 use ssvr_core::closed_form::duhamel::{DuhamelClosedForm, Reversal, ReversalTrain};
 use ssvr_core::closed_form::fourier::FourierResponse;
 use ssvr_core::{Regime, Structure, StructureParams};
+use ssvr_integration_tests::finite::{finite_max, max_finite};
 use ssvr_integration_tests::ode::{ForceStep, State, Tolerance, TwoMassModel};
 use std::f64::consts::PI;
 
@@ -159,7 +160,7 @@ fn closed_form_vs_ode(s: &Structure, kind: TrainKind, tol: Tolerance) -> (f64, f
     for (&t, &want) in outputs.iter().zip(&ode.top_accel) {
         let got = cf.accel(&train, t);
         assert!(got.is_finite(), "closed form not finite at t = {t}");
-        let e = (got - want).abs() / s.gmu();
+        let e = max_finite(0.0, (got - want).abs() / s.gmu(), "|cf − ODE|", t);
         if e > worst {
             (worst, at) = (e, t);
         }
@@ -207,14 +208,18 @@ fn closed_form_equals_ode_in_all_regimes() {
 
 #[test]
 fn closed_form_is_continuous_across_critical_damping() {
+    // (ξ, regime, bound on the difference from critical): measured 4.5e-10 gμ at ξ = 0.5 ∓ 2.5e-10
+    // (the true change of the response with ξ) and 2.0e-15 at ξ = 0.5 ∓ 1e-15.
     const TOL: f64 = 1e-9;
+    // Each side against the ODE of its own ξ: measured ≤ 1.0e-12.
+    const ODE_TOL: f64 = 3e-12;
     let critical = structure(3.0, 1.0, 0.5);
     assert_eq!(critical.regime(), Regime::Critical);
     let neighbours = [
-        (0.5 - 2.5e-10, Regime::Underdamped),
-        (0.5 + 2.5e-10, Regime::Overdamped),
-        (0.5 - 1e-15, Regime::Underdamped),
-        (0.5 + 1e-15, Regime::Overdamped),
+        (0.5 - 2.5e-10, Regime::Underdamped, TOL),
+        (0.5 + 2.5e-10, Regime::Overdamped, TOL),
+        (0.5 - 1e-15, Regime::Underdamped, 1e-14),
+        (0.5 + 1e-15, Regime::Overdamped, 1e-14),
     ];
     let irregular = irregular_reversals();
     for kind in [TrainKind::Periodic, TrainKind::Irregular] {
@@ -224,24 +229,23 @@ fn closed_form_is_continuous_across_critical_damping() {
             let cf = DuhamelClosedForm::new(&critical);
             outputs.iter().map(|&t| cf.accel(&train, t)).collect()
         };
-        for (xi, regime) in neighbours {
+        for (xi, regime, bound) in neighbours {
             let s = structure(3.0, 1.0, xi);
             assert_eq!(s.regime(), regime, "xi = {xi}");
             let cf = DuhamelClosedForm::new(&s);
-            let worst = outputs
-                .iter()
-                .zip(&at_critical)
-                .map(|(&t, &c)| {
+            let worst = finite_max(
+                "difference from critical",
+                outputs.iter().zip(&at_critical).map(|(&t, &c)| {
                     let v = cf.accel(&train, t);
                     assert!(v.is_finite(), "xi = {xi}, t = {t}");
                     (v - c).abs() / s.gmu()
-                })
-                .fold(0.0f64, f64::max);
+                }),
+            );
             println!(
                 "{kind:?}: xi = 0.5 {:+.1e} ({regime:?}) vs critical: max diff/gmu = {worst:.2e}",
                 xi - 0.5
             );
-            assert!(worst <= TOL, "{kind:?} xi = {xi}: {worst:e}");
+            assert!(worst <= bound, "{kind:?} xi = {xi}: {worst:e}");
         }
         // Each side also matches the ODE of its own ξ.
         for xi in [0.5 - 2.5e-10, 0.5 + 2.5e-10] {
@@ -251,7 +255,7 @@ fn closed_form_is_continuous_across_critical_damping() {
                 "{kind:?}: xi = 0.5 {:+.1e} vs ODE: {err:.2e} at t = {at:.6}",
                 xi - 0.5
             );
-            assert!(err <= TOL, "{kind:?} xi = {xi}: {err:e} at {at}");
+            assert!(err <= ODE_TOL, "{kind:?} xi = {xi}: {err:e} at {at}");
         }
     }
 }
@@ -297,11 +301,12 @@ fn massless_base_limit_is_eq39() {
     // Eq (39): ü1 → gμ s(t) once the fast transient (rate ≈ 2a = 2Mpξ ≈ 4e9/s here) has died.
     const TOL: f64 = 1e-6;
     const SETTLE: f64 = 1e-6;
-    // The leading correction, typed from the transfer function of the physics notes: the slow pole
+    // The leading correction, typed from the transfer function in docs/equations.md: the slow pole
     // r1 = p/(2ξ)·(1 + ε), ε = 1/(4Mξ²), nearly cancels the zero at p/(2ξ) and leaves the residue ε,
     // so ü1 = gμ [s(t) + ε Σ_j Δs_j e^{−r1 (t − t_j)}] + O(ε², r1/(2a)). Checking this to 1e-10·gμ
-    // shows the closed form is accurate far beyond the 1e-6 of eq (39) itself.
-    const TOL_CORRECTED: f64 = 1e-10;
+    // shows the closed form is accurate far beyond the 1e-6 of eq (39) itself (measured 6.0e-14 at
+    // ξ = 0.05, 2.3e-16 at ξ = 0.3; eq 39 itself 2.0e-7).
+    const TOL_CORRECTED: f64 = 3e-13;
     for xi in [0.05, 0.3] {
         let s = structure(1.0, 1e-9, xi);
         let gmu = s.gmu();
@@ -352,7 +357,7 @@ fn massless_base_limit_is_eq39() {
                 let t_last = jumps.last().map_or(f64::NEG_INFINITY, |&(tj, _)| tj);
                 if t - t_last > SETTLE {
                     checked += 1;
-                    let e = (v - gmu * level).abs() / gmu;
+                    let e = max_finite(0.0, (v - gmu * level).abs() / gmu, "|ü1 − gμ s|", t);
                     if e > worst {
                         (worst, worst_at) = (e, t);
                     }
@@ -360,7 +365,8 @@ fn massless_base_limit_is_eq39() {
                         .iter()
                         .map(|&(tj, dj)| dj * (-r1 * (t - tj)).exp())
                         .sum();
-                    worst_corr = worst_corr.max((v - gmu * (level + eps * corr)).abs() / gmu);
+                    let e = (v - gmu * (level + eps * corr)).abs() / gmu;
+                    worst_corr = max_finite(worst_corr, e, "|ü1 − corrected eq 39|", t);
                 }
             }
             println!(
@@ -407,10 +413,9 @@ fn peak_abs(f: impl Fn(f64) -> f64, t0: f64, period: f64, grid: usize) -> f64 {
                 lo = x1;
             }
         }
-        best = best
-            .max(f(0.5 * (lo + hi)).abs())
-            .max(f(lo).abs())
-            .max(f(hi).abs());
+        for t in [0.5 * (lo + hi), lo, hi] {
+            best = max_finite(best, f(t).abs(), "|ü1| near the peak", t);
+        }
     }
     best
 }
@@ -455,6 +460,7 @@ fn rfm_equals_rdm_steady_state() {
     for i in 0..n {
         let tau = i as f64 * PERIOD / n as f64;
         let e = (rdm(tau) - rfm.accel(tau, HARMONICS)).abs() / gmu;
+        let e = max_finite(0.0, e, "|RDM − RFM|", tau);
         if e > worst {
             (worst, worst_at) = (e, tau);
         }
@@ -469,9 +475,10 @@ fn rfm_equals_rdm_steady_state() {
          {worst:.2e} at tau = {worst_at:.6} s (truncation bound {tail:.2e}); away from \
          reversals {worst_interior:.2e}"
     );
+    // Measured: 2.84e-5 (at a reversal, the truncation bound 2.85e-5), 1.0e-12 away from reversals.
     assert!(worst <= tail + 1e-9, "{worst:e} > bound {tail:e}");
     assert!(worst <= 5e-5, "{worst:e}");
-    assert!(worst_interior <= 1e-6, "{worst_interior:e}");
+    assert!(worst_interior <= 5e-12, "{worst_interior:e}");
 
     // Peak.
     let peak_rdm = peak_abs(rdm, 0.0, PERIOD, 4000);
@@ -484,8 +491,9 @@ fn rfm_equals_rdm_steady_state() {
          RFM converged ({h_conv} harmonics) {peak_conv:.12} (rel {rel_conv:.2e})",
         peak_rdm / gmu
     );
-    assert!(rel <= 1e-6, "{rel:e}");
-    assert!(rel_conv <= 1e-5, "{rel_conv:e}");
+    // Measured: 4.9e-10 at 20 000 harmonics, 1.8e-7 converged (512 harmonics).
+    assert!(rel <= 2e-9, "{rel:e}");
+    assert!(rel_conv <= 5e-7, "{rel_conv:e}");
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -508,12 +516,13 @@ fn rfm_is_the_alpha_to_zero_limit_of_tfm() {
             })
             .sum::<f64>()
             / gmu;
-        let worst = (0..1000)
-            .map(|i| {
+        let worst = finite_max(
+            "|TFM − RFM|",
+            (0..1000).map(|i| {
                 let t = i as f64 * PERIOD / 1000.0;
                 (tfm.accel(t, HARMONICS) - rfm.accel(t, HARMONICS)).abs() / gmu
-            })
-            .fold(0.0f64, f64::max);
+            }),
+        );
         (worst, coeff_bound)
     };
     let (d6, b6) = history_diff(1e-6);
@@ -535,14 +544,15 @@ fn rfm_is_the_alpha_to_zero_limit_of_tfm() {
         .peak(HARMONICS);
     let rel = (p_tfm - p_rfm).abs() / p_rfm;
     println!("peak: RFM {p_rfm:.12}, TFM(1e-6) {p_tfm:.12}, rel {rel:.2e}");
-    assert!(rel <= 1e-9, "{rel:e}");
+    // Measured 1.7e-12.
+    assert!(rel <= 5e-12, "{rel:e}");
 }
 
 // ---------------------------------------------------------------------------------------------
-// 6. The integrator against exact solutions typed from the physics notes.
+// 6. The integrator against exact solutions typed from docs/equations.md.
 // ---------------------------------------------------------------------------------------------
 
-/// Derived constants typed from the physics notes: (p, ξ, M, a, gμ).
+/// Derived constants typed from docs/equations.md: (p, ξ, M, a, gμ).
 fn notes_constants(pr: &StructureParams) -> (f64, f64, f64, f64, f64) {
     let p = 2.0 * PI * pr.natural_frequency_hz;
     let xi = pr.damping_ratio;
@@ -557,7 +567,7 @@ fn notes_constants(pr: &StructureParams) -> (f64, f64, f64, f64, f64) {
 }
 
 /// Exact response from rest to F stepping 0 → +F0 at τ = 0: absolute state and ü1 = R(τ)
-/// (physics notes, "Step response"; δ = −(gμ/p²)(1 − g(τ)), centre of mass at gμτ²/2).
+/// (docs/equations.md, "Free vibration"; δ = −(gμ/p²)(1 − g(τ)), centre of mass at gμτ²/2).
 fn exact_step(pr: &StructureParams, tau: f64) -> (State, f64) {
     let (p, xi, m, a, gmu) = notes_constants(pr);
     let disc = 1.0 - m * xi * xi;
@@ -637,10 +647,13 @@ fn errors(
     want: &[(State, f64)],
 ) -> (f64, f64, f64) {
     let (mut ea, mut eu, mut ev) = (0.0f64, 0.0f64, 0.0f64);
-    for ((y, acc), (yw, accw)) in got.iter().zip(got_acc).zip(want) {
-        ea = ea.max((acc - accw).abs() / gmu);
-        eu = eu.max((y[0] - yw[0]).abs().max((y[2] - yw[2]).abs()) / model.length_scale);
-        ev = ev.max((y[1] - yw[1]).abs().max((y[3] - yw[3]).abs()) / model.velocity_scale);
+    for (k, ((y, acc), (yw, accw))) in got.iter().zip(got_acc).zip(want).enumerate() {
+        ea = max_finite(ea, (acc - accw).abs() / gmu, "ü1 error", k);
+        let (l, v) = (model.length_scale, model.velocity_scale);
+        for i in [0, 2] {
+            eu = max_finite(eu, (y[i] - yw[i]).abs() / l, "displacement error", k);
+            ev = max_finite(ev, (y[i + 1] - yw[i + 1]).abs() / v, "velocity error", k);
+        }
     }
     (ea, eu, ev)
 }
@@ -675,7 +688,8 @@ fn integrator_matches_exact_solutions() {
              ({} steps, {} rejected)",
             sol.accepted_steps, sol.rejected_steps
         );
-        assert!(ea <= TOL && eu <= 1e-8 && ev <= 1e-8, "{name}");
+        // Measured: ü1 ≤ 3.7e-11 gμ, u ≤ 1.0e-10 L, v ≤ 1.5e-11 L·ω0.
+        assert!(ea <= TOL && eu <= 3e-10 && ev <= 5e-11, "{name}");
     }
 
     // (b) Free vibration from an arbitrary absolute state, 10 s (≈ 300 cycles undamped).
@@ -734,12 +748,13 @@ fn integrator_matches_exact_solutions() {
             &outputs,
             Tolerance { rel: tol, abs: tol },
         );
-        let e = sol
-            .top_accel
-            .iter()
-            .zip(&exact)
-            .map(|(a, b)| (a - b).abs() / s.gmu())
-            .fold(0.0f64, f64::max);
+        let e = finite_max(
+            "|ODE − exact|",
+            sol.top_accel
+                .iter()
+                .zip(&exact)
+                .map(|(a, b)| (a - b).abs() / s.gmu()),
+        );
         println!(
             "undamped periodic train, 3 s, tolerance {tol:e}: max |ode - exact|/gmu = {e:.2e} \
              ({} steps)",

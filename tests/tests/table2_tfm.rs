@@ -16,7 +16,7 @@ fn tfm_reproduces_table2_tfm_column() {
             "test {}: ours {peak_gal:.2} gal ({h} harmonics), paper {} gal",
             row.no, row.tfm_gal
         );
-        // The paper prints whole gal; the physics notes found agreement within 0.8 gal.
+        // The paper prints whole gal; docs/equations.md records agreement within 0.8 gal.
         assert!(
             (peak_gal - row.tfm_gal).abs() <= 1.0,
             "test {}: {peak_gal} vs {}",

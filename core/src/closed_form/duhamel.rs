@@ -1,5 +1,5 @@
 //! The rectangular Duhamel method (RDM): eq (36), corrected and generalised to any train of friction
-//! reversals, as a superposition of exact step responses (physics notes):
+//! reversals, as a superposition of exact step responses (docs/equations.md):
 //!
 //! ```text
 //! ü1(t) = gμ Σ_{t_j ≤ t} (s_j − s_{j−1}) (1 − ecm(t − t_j)) = gμ [ s(t) − Σ_{t_j ≤ t} Δs_j ecm(t − t_j) ]

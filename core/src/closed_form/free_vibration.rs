@@ -221,7 +221,7 @@ mod tests {
         .unwrap()
     }
 
-    /// The textbook forms of the physics notes, written independently.
+    /// The textbook forms of docs/equations.md ("Free vibration"), written independently.
     fn textbook_ecm(s: &Structure, t: f64) -> f64 {
         let a = s.a();
         match s.regime() {

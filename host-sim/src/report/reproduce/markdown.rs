@@ -33,7 +33,7 @@ pub fn report_md(r: &Results) -> String {
     let _ = writeln!(
         s,
         "Structure: m2 = 1 kg, m1 = the m1/m2 ratio, natural period T0, ξ, μ; input A0 sin(2πt/T). Our TFM: eq (14)-(18) \
-         as corrected in the physics notes, converged harmonic count. Our RFM = the steady state of RDM (eq 20). \
+         as corrected in docs/equations.md, converged harmonic count. Our RFM = the steady state of RDM (eq 20). \
          Truth: steady-state peak |ü1| over the last 5 periods of a run long enough for the transient to decay \
          (\"settled\" compares with the 5 periods before).\n"
     );
