@@ -14,16 +14,10 @@ use ssvr_proto::{
     StickSlipModel,
 };
 
-/// What the controller is told of a scene's specimen and sensors.
+/// What the controller is told of a scene's specimen and sensors (`ssvr_scene::Specimen::prior`,
+/// the same as the firmware's build script reads).
 pub fn specimen_of(scene: &Scene) -> Specimen {
-    Specimen {
-        structure: *scene.structure.params(),
-        static_friction_coefficient: scene.static_friction_coefficient,
-        sample_rate_hz: scene.rate_hz,
-        disp_noise_rms_m: scene.sensors.disp_noise_rms_m,
-        accel_noise_rms_m_s2: scene.sensors.accel_noise_rms_m_s2,
-        disp_range_m: scene.sensors.disp_range_m,
-    }
+    crate::scene::Specimen::from(scene).prior()
 }
 
 /// The plan of a scene and a model (what the firmware built for them runs).

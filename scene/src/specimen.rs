@@ -77,3 +77,18 @@ impl From<&Scene> for Specimen {
         }
     }
 }
+
+impl Specimen {
+    /// What the controller is told (`ssvr_proto::Specimen`, the input of its plan): the
+    /// structure, static friction, sample rate, sensor noise levels and displacement range.
+    pub fn prior(&self) -> ssvr_proto::Specimen {
+        ssvr_proto::Specimen {
+            structure: *self.structure.params(),
+            static_friction_coefficient: self.static_friction_coefficient,
+            sample_rate_hz: self.rate_hz,
+            disp_noise_rms_m: self.sensors.disp_noise_rms_m,
+            accel_noise_rms_m_s2: self.sensors.accel_noise_rms_m_s2,
+            disp_range_m: self.sensors.disp_range_m,
+        }
+    }
+}
