@@ -1,0 +1,165 @@
+//! The firmware runs the pipeline in batches of `BATCH` samples, the host one sample at a time:
+//! both must give the same frames bit for bit (flags, events, predictions) and the same counters,
+//! for every model, on signals with friction events, events at batch edges, and unusable
+//! samples (NaN, missing, saturated), and with the sensor log's reversals as the events.
+
+use ssvr_core::StructureParams;
+use ssvr_proto::log::LogReversal;
+use ssvr_proto::{
+    flags, AccelerationDetector, DisplacementDetector, EventDetector, EventSource, FixedBaseModel,
+    Frame, FromPlan, Model, ModelKind, Pipeline, Plan, RectangularModel, Sample, Specimen,
+    StickSlipModel, BATCH,
+};
+
+const H: usize = 2048;
+
+fn specimen() -> Specimen {
+    Specimen {
+        structure: StructureParams {
+            m1_kg: 29.5,
+            m2_kg: 1.75,
+            natural_frequency_hz: 7.0,
+            damping_ratio: 0.05,
+            friction_coefficient: 0.2,
+            gravity_m_s2: 9.80665,
+        },
+        static_friction_coefficient: 0.25,
+        sample_rate_hz: 10_000.0,
+        disp_noise_rms_m: 1e-6,
+        accel_noise_rms_m_s2: 5e-3,
+        disp_range_m: 0.05,
+    }
+}
+
+/// Sample k: table and top accelerations, a slip acceleration that sticks 600 samples, breaks
+/// away and slides (base − table), a displacement triangle (a reversal every 700 samples), and
+/// unusable samples here and there; every 997th sample carries a logged reversal.
+fn sample(k: usize) -> Sample {
+    let t = k as f32 * 1e-4;
+    let table = 2.0 * (t * 44.0).sin();
+    let top = 1.5 * (t * 44.0 + 0.3).sin();
+    let m = k % 1000;
+    let slip_accel = if m < 600 {
+        0.0
+    } else if m < 620 {
+        0.2 * (m - 599) as f32
+    } else if m < 640 {
+        -2.0
+    } else {
+        0.0
+    };
+    let half = 700;
+    let p = k % (2 * half);
+    let disp = 1e-5 * (if p < half { p } else { 2 * half - p }) as f32 - 3e-3;
+    let mut s = Sample {
+        channels: [table, table + slip_accel, top, disp],
+        flags: 0,
+        reversal: (k % 997 == 5).then_some(LogReversal {
+            level: if (k / 997) % 2 == 0 { 1 } else { -1 },
+            age_samples: 0.25 + (k % 3) as f32,
+        }),
+    };
+    match k % 1237 {
+        100 => s.channels[1] = f32::NAN,
+        200 => s = Sample::missing(0),
+        300 => s.flags = flags::SATURATED,
+        400 => s.flags = flags::SATURATED | flags::DISP_INVALID,
+        _ => {}
+    }
+    s
+}
+
+fn compare<M: Model + FromPlan + Clone, D: EventDetector + Clone>(
+    model: ModelKind,
+    source: EventSource,
+) {
+    let plan = Plan::new(specimen(), model).unwrap();
+    let build = || {
+        Pipeline::new(
+            M::from_plan(&plan).unwrap(),
+            D::from_plan(&plan).unwrap(),
+            source,
+            plan.disp_range_m(),
+        )
+    };
+    let (mut one, mut batched) = (build(), build());
+    let n = 20_000;
+    let samples: Vec<Sample> = (0..n).map(sample).collect();
+    let single: Vec<Frame> = samples.iter().map(|s| one.step(s)).collect();
+    let mut frames = Vec::new();
+    // Batches of varying length (1 ..= BATCH), as the QEMU replay's last partial batch.
+    let mut k = 0;
+    let mut len = 1;
+    while k < n {
+        let end = (k + len).min(n);
+        let mut out = [Frame::EMPTY; BATCH];
+        let got = batched.step_batch(&samples[k..end], &mut out);
+        assert_eq!(got, end - k);
+        frames.extend_from_slice(&out[..got]);
+        k = end;
+        len = len % BATCH + 1;
+    }
+    let mut events = 0;
+    for (i, (a, b)) in single.iter().zip(&frames).enumerate() {
+        assert_eq!(a.index, b.index, "{model:?} index @{i}");
+        assert_eq!(a.flags, b.flags, "{model:?} flags @{i}");
+        assert_eq!(a.event, b.event, "{model:?} event @{i}");
+        assert_eq!(
+            a.prediction.to_bits(),
+            b.prediction.to_bits(),
+            "{model:?} prediction @{i}: {} vs {}",
+            a.prediction,
+            b.prediction
+        );
+        assert!(
+            a.prediction.is_finite(),
+            "{model:?} prediction @{i} not finite"
+        );
+        events += usize::from(a.event.is_some());
+    }
+    assert_eq!(one.stats, batched.stats, "{model:?} counters");
+    assert!(events > 10, "{model:?}: only {events} events");
+    assert!(one.stats.invalid > 0, "{model:?}: no invalid sample");
+    if model != ModelKind::FixedBase {
+        assert!(one.stats.pushed > 10, "{model:?}: {:?}", one.stats);
+    }
+}
+
+#[test]
+fn rectangular_batches_equal_single_steps() {
+    compare::<RectangularModel, DisplacementDetector<64>>(
+        ModelKind::Rectangular,
+        EventSource::Detector,
+    );
+}
+
+#[test]
+fn stick_slip_batches_equal_single_steps() {
+    compare::<StickSlipModel<H>, AccelerationDetector<64>>(
+        ModelKind::StickSlip,
+        EventSource::Detector,
+    );
+}
+
+#[test]
+fn fixed_base_batches_equal_single_steps() {
+    compare::<FixedBaseModel<H>, DisplacementDetector<64>>(
+        ModelKind::FixedBase,
+        EventSource::Detector,
+    );
+}
+
+#[test]
+fn logged_reversals_batches_equal_single_steps() {
+    compare::<RectangularModel, DisplacementDetector<64>>(ModelKind::Rectangular, EventSource::Log);
+    compare::<StickSlipModel<H>, AccelerationDetector<64>>(ModelKind::StickSlip, EventSource::Log);
+}
+
+#[test]
+fn a_model_type_refuses_another_models_plan() {
+    let plan = Plan::new(specimen(), ModelKind::StickSlip).unwrap();
+    assert!(RectangularModel::from_plan(&plan).is_err());
+    assert!(FixedBaseModel::<H>::from_plan(&plan).is_err());
+    assert!(DisplacementDetector::<256>::from_plan(&plan).is_err());
+    assert!(AccelerationDetector::<128>::from_plan(&plan).is_err());
+}
