@@ -622,8 +622,11 @@ pub fn run<W: Write>(
     let mut rect_err = ErrStats::default();
     // Revised predictions: each sample once every event that can reach back to it is known (the
     // detector's stick window plus its fits), compared with the truth kept for that long.
-    let revision_delay = (pipe.max_age_samples() + 8) as u64;
+    // The oldest sample the stick-slip model keeps is `history − 1` back; an event is back-dated
+    // by at most `max_age` = history − 2 samples, so that sample is final.
+    let revision_delay = plan.history.saturating_sub(1) as u64;
     let mut rev_err = ErrStats::default();
+    let mut rev_missing = 0u64;
     let mut truth_ring: std::collections::VecDeque<f64> = std::collections::VecDeque::new();
     let mut ideal_err = ErrStats::default();
     let mut meas_err = ErrStats::default();
@@ -710,8 +713,9 @@ pub fn run<W: Write>(
             if k >= revision_delay {
                 let d = k - revision_delay;
                 let want = truth_ring.pop_front().unwrap_or(f64::NAN);
-                if let Some(r) = pipe.revised(d) {
-                    rev_err.add(scene.time(d), r as f64, want);
+                match pipe.revised(d) {
+                    Some(r) => rev_err.add(scene.time(d), r as f64, want),
+                    None => rev_missing += 1,
                 }
             }
             ideal_err.add(t, ideal_pred as f64, truth_top);
@@ -766,11 +770,13 @@ pub fn run<W: Write>(
     let first = scene.samples.saturating_sub(truth_ring.len() as u64);
     for (i, want) in truth_ring.iter().enumerate() {
         let d = first + i as u64;
-        if let Some(r) = pipe.revised(d) {
-            rev_err.add(scene.time(d), r as f64, *want);
+        match pipe.revised(d) {
+            Some(r) => rev_err.add(scene.time(d), r as f64, *want),
+            None => rev_missing += 1,
         }
     }
-    let revised = model != Model::Rectangular;
+    // Every sample revised, or no revised figures (never a figure over part of the run).
+    let revised = model != Model::Rectangular && rev_missing == 0;
 
     // True events up to the last sample.
     let true_events: Vec<EventMark> = events
