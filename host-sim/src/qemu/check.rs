@@ -33,16 +33,13 @@ use super::decode;
 use super::icount::{instruction_counts, InstructionCounts};
 use super::image;
 use super::log::{self as slog, scene_log, SceneLog};
+use super::reference::Reference;
 use crate::model::Model;
 use crate::pipeline;
 use crate::scene::Scene;
 use anyhow::{anyhow, bail, Context, Result};
 use serde::Serialize;
-use ssvr_core::closed_form::duhamel::{DuhamelClosedForm, Reversal, ReversalTrain};
-use ssvr_core::math::Libm;
-use ssvr_core::stick_slip::StickSlipEstimator;
-use ssvr_proto::plan::MAX_HISTORY;
-use ssvr_proto::{flags, EventKind, Frame, Plan, Sample};
+use ssvr_proto::{flags, EventKind, Frame};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -69,64 +66,6 @@ pub fn instructions_goal(model: Model) -> f64 {
 pub const GOAL_BOARD_FLASH_BYTES: u64 = 32 * 1024;
 /// Goal: board image static RAM, `.data` + `.bss` (+ `.uninit`), bytes.
 pub const GOAL_BOARD_RAM_BYTES: u64 = 8 * 1024;
-
-/// The friction train the estimator was given, as the firmware's frames report it, for the
-/// closed form: events pushed and accepted (flag `REVERSAL`), at t = (k − age)/rate (f64). Kept
-/// sorted by time with levels re-accumulated from the pushed jumps, so that the closed form sums
-/// exactly the steps the estimator superposed even if a detection back-dates an event before an
-/// earlier-pushed one.
-#[derive(Debug, Clone, Default)]
-pub struct DetectedTrain {
-    /// (time, jump) in time order; jumps at equal times merged.
-    steps: Vec<(f64, f64)>,
-    /// The train for `DuhamelClosedForm` (levels = running sums of the jumps).
-    reversals: Vec<Reversal>,
-    /// Level after the last push (push order: what the estimator's `level` is).
-    level: f64,
-    /// Events pushed whose time is before an earlier-pushed event's time.
-    pub out_of_order: usize,
-    /// Pushed events that changed the level.
-    pub level_changes: usize,
-}
-
-impl DetectedTrain {
-    /// Add the event of sample `k` (if the frame pushed one).
-    pub fn push_frame(&mut self, k: u64, f: &Frame, rate_hz: f64) {
-        let Some(e) = f.event.filter(|e| !e.is_stick()) else {
-            return;
-        };
-        if f.flags & flags::EVENT_PUSHED == 0 {
-            return;
-        }
-        let level = f64::from(e.level);
-        let jump = level - self.level;
-        self.level = level;
-        if jump == 0.0 {
-            return;
-        }
-        self.level_changes += 1;
-        let t = (k as f64 - f64::from(e.age_samples)) / rate_hz;
-        let i = self.steps.partition_point(|&(ts, _)| ts < t);
-        if i < self.steps.len() {
-            self.out_of_order += 1;
-        }
-        match self.steps.get_mut(i) {
-            Some(s) if s.0 == t => s.1 += jump,
-            _ => self.steps.insert(i, (t, jump)),
-        }
-        self.reversals.truncate(i);
-        let mut acc = self.reversals.last().map_or(0.0, |r| r.level);
-        for &(time_s, d) in &self.steps[i..] {
-            acc += d;
-            self.reversals.push(Reversal { time_s, level: acc });
-        }
-    }
-
-    /// The train so far.
-    pub fn train(&self) -> ReversalTrain<'_> {
-        ReversalTrain::Explicit(&self.reversals)
-    }
-}
 
 /// Wall times of the steps (s).
 #[derive(Debug, Clone, Copy, Default, Serialize)]
@@ -542,116 +481,6 @@ pub fn run_scene_model(
         goals,
         timing,
     })
-}
-
-/// The full-precision reference of a model, fed the firmware's frames one by one.
-enum Reference {
-    /// The closed form on the detected train (rectangular model).
-    ClosedForm {
-        cf: DuhamelClosedForm,
-        train: Box<DetectedTrain>,
-    },
-    /// The stick-slip estimator in f64 on the detected events (stick-slip, fixed-base).
-    StickSlip {
-        est: Box<StickSlipEstimator<f64, Libm, MAX_HISTORY>>,
-        max_age: f32,
-        /// Last pushed phase, latest pushed event time.
-        last: (i8, f64),
-        level_changes: usize,
-        out_of_order: usize,
-    },
-}
-
-impl Reference {
-    fn new(scene: &Scene, plan: &Plan) -> Result<Self> {
-        Ok(match plan.model {
-            Model::Rectangular => Reference::ClosedForm {
-                cf: DuhamelClosedForm::new(&scene.structure),
-                train: Box::default(),
-            },
-            Model::StickSlip | Model::FixedBase => Reference::StickSlip {
-                est: Box::new(
-                    StickSlipEstimator::with_history(
-                        &scene.structure,
-                        scene.rate_hz,
-                        plan.stick_slip,
-                        plan.history,
-                    )
-                    .map_err(|e| {
-                        anyhow!("the f64 stick-slip estimator rejects the scene: {e:?}")
-                    })?,
-                ),
-                max_age: plan.max_age as f32,
-                last: (0, f64::NEG_INFINITY),
-                level_changes: 0,
-                out_of_order: 0,
-            },
-        })
-    }
-
-    fn name(&self) -> &'static str {
-        match self {
-            Reference::ClosedForm { .. } => "closed form (f64) on the detected train",
-            Reference::StickSlip { .. } => {
-                "stick-slip estimator in f64 (libm) on the detected events and measured inputs"
-            }
-        }
-    }
-
-    /// The reference's ü1 at sample k of frame `f` (log sample `s`).
-    fn step(&mut self, k: u64, f: &Frame, s: &Sample, rate: f64) -> Result<f64> {
-        match self {
-            Reference::ClosedForm { cf, train } => {
-                train.push_frame(k, f, rate);
-                let t = k as f64 / rate;
-                Ok(cf.evaluate(&train.train(), t, usize::MAX).accel_m_s2)
-            }
-            Reference::StickSlip {
-                est,
-                max_age,
-                last,
-                level_changes,
-                out_of_order,
-            } => {
-                if let Some(e) = f.event.filter(|_| f.flags & flags::EVENT_PUSHED != 0) {
-                    let phase = if e.is_stick() { 0 } else { e.level };
-                    let age = e.age_samples.min(*max_age);
-                    est.push_event(phase, f64::from(age)).map_err(|err| {
-                        anyhow!("the f64 reference rejects the event of sample {k}: {err:?}")
-                    })?;
-                    let t = (k as f64 - f64::from(age)) / rate;
-                    if t < last.1 {
-                        *out_of_order += 1;
-                    }
-                    if phase != last.0 {
-                        *level_changes += 1;
-                    }
-                    *last = (phase, last.1.max(t));
-                }
-                let top_valid = f.flags & (flags::SATURATED | flags::MISSING) == 0;
-                let top = if top_valid {
-                    f64::from(s.channels[ssvr_proto::Channel::TopAccel.index()])
-                } else {
-                    f64::NAN
-                };
-                Ok(est.update(
-                    f64::from(s.channels[ssvr_proto::Channel::TableAccel.index()]),
-                    top,
-                ))
-            }
-        }
-    }
-
-    fn level_changes_and_order(&self) -> (usize, usize) {
-        match self {
-            Reference::ClosedForm { train, .. } => (train.level_changes, train.out_of_order),
-            Reference::StickSlip {
-                level_changes,
-                out_of_order,
-                ..
-            } => (*level_changes, *out_of_order),
-        }
-    }
 }
 
 /// Cortex-M4F instruction counts of a model's estimator, measured once: the QEMU image built

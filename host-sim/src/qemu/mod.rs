@@ -6,6 +6,7 @@
 //! * [`decode`]: the defmt stream decoded by type into messages and `ssvr_proto::Frame`s;
 //! * [`icount`]: the instruction counts the image measures;
 //! * [`check`]: the comparisons and the goals ([`check::QemuReport`]);
+//! * [`reference`]: the full-precision references of each model;
 //! * [`report`]: printing and the command.
 
 pub mod check;
@@ -13,6 +14,7 @@ pub mod decode;
 pub mod icount;
 pub mod image;
 pub mod log;
+pub mod reference;
 pub mod report;
 
 pub use check::{measure_instruction_counts, run_scene, run_scene_model, QemuReport};
