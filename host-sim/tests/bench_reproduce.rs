@@ -169,7 +169,7 @@ fn bench_quick_json_rows_are_complete_and_sane() {
 /// term (exponential, sine and cosine) per past reversal at every sample (undamped: none is
 /// dropped); the recursion does one table step per sample plus one kernel evaluation per reversal.
 fn long_train_work(quick: bool) -> (f64, f64) {
-    use ssvr_core::duhamel_closed_form::{DuhamelClosedForm, ReversalTrain};
+    use ssvr_core::closed_form::duhamel::{DuhamelClosedForm, ReversalTrain};
     let scenes = host_sim::report::bench::scenes(quick).unwrap();
     let sc = scenes.iter().find(|s| s.id == "long-train").unwrap();
     let train = ReversalTrain::Explicit(&sc.train);
