@@ -105,6 +105,8 @@ fn check_common(v: &Value, samples: u64) {
     assert!(num(v, "board_ram_bytes") <= 8.0 * 1024.0);
     for goal in [
         "firmware_equals_host",
+        "plan_equals_host",
+        "reference_error_le_goal",
         "board_flash_le_32k",
         "board_ram_le_8k",
     ] {
