@@ -24,13 +24,18 @@ pub(super) struct Slot<T> {
     pub(super) z: [T; 2],
 }
 
-/// The next interval is plain sliding: the hot path with the precomputed forcing.
-pub(super) const MODE_SLIDE: u8 = 0;
-/// The next interval is plain stuck: the hot path of the fixed-base map.
-pub(super) const MODE_STUCK: u8 = 1;
-/// Anything else (sample 0, a switch inside the interval, a phase change at its end): the
-/// general path.
-pub(super) const MODE_COLD: u8 = 2;
+/// Which path the next interval takes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[repr(u8)]
+pub(super) enum Mode {
+    /// Plain sliding: the hot path with the precomputed forcing.
+    Slide = 0,
+    /// Plain stuck: the hot path of the fixed-base map.
+    Stuck = 1,
+    /// Anything else (sample 0, a switch inside the interval, a phase change at its end): the
+    /// general path.
+    Cold = 2,
+}
 
 /// The stick-slip aware estimator with up to `H` samples of history (the longest back-dating):
 /// `H` slots of storage, of which [`Self::history`] are the history.
@@ -56,7 +61,7 @@ pub struct StickSlipEstimator<T: Real, M: Transcendentals<T>, const H: usize> {
     pub(super) open: StuckMap<T>,
     pub(super) c: StickSlipCoefficients<T>,
     /// [`MODE_SLIDE`], [`MODE_STUCK`] or [`MODE_COLD`]: how to step interval k − 1 → k.
-    pub(super) mode: u8,
+    pub(super) mode: Mode,
     /// The current phase (of interval k − 1 → k on, once a pending change is applied).
     pub(super) phase: Level,
     /// The slow path ([`Self::at_mark`]) runs after storing the sample of slot `mark − 1`
@@ -201,7 +206,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
             closed: StuckMap::closed(&c, gain),
             open: StuckMap::open(&c),
             c,
-            mode: MODE_COLD,
+            mode: Mode::Cold,
             phase: 0,
             mark: H,
             id_mark: usize::MAX,

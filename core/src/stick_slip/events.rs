@@ -1,7 +1,7 @@
 //! [`StickSlipEstimator::push_event`]: a phase change reported late, written into the history's
 //! phases and re-simulated from.
 
-use super::estimator::{StickSlipEstimator, MODE_COLD};
+use super::estimator::{Mode, StickSlipEstimator};
 use super::packed;
 use crate::error::{Error, Param};
 use crate::math::{Real, Transcendentals};
@@ -59,7 +59,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
                 }
                 self.plain_from = k;
                 self.phase = phase;
-                self.mode = MODE_COLD;
+                self.mode = Mode::Cold;
                 self.fast_until = 0;
                 self.stuck_until = 0;
                 self.note_event(k, true, phase);
@@ -121,7 +121,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
         if back >= 2 || code == plain {
             self.set_fast_mode();
         } else {
-            self.mode = MODE_COLD;
+            self.mode = Mode::Cold;
             self.fast_until = 0;
             self.stuck_until = 0;
         }

@@ -2,7 +2,7 @@
 //! and the work done on a block once it is final (see the module documentation of
 //! [`crate::stick_slip`]).
 
-use super::estimator::{StickSlipEstimator, MODE_SLIDE};
+use super::estimator::{Mode, StickSlipEstimator};
 use super::maps::mat;
 use super::packed;
 use super::phase::Level;
@@ -245,7 +245,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
         if self.cfg.use_identified_mu && self.id.rls.n >= self.cfg.min_blocks && plausible {
             self.mu_use = mu_hat;
             self.gmu = self.c.g * self.mu_use;
-            if self.mode == MODE_SLIDE {
+            if self.mode == Mode::Slide {
                 self.set_drive();
             }
         }

@@ -1,7 +1,7 @@
 //! The history's ring of slots: where a sample is, and the slow path at the marks (the
 //! identification blocks and the ring's wrap).
 
-use super::estimator::{StickSlipEstimator, MODE_SLIDE, MODE_STUCK};
+use super::estimator::{Mode, StickSlipEstimator};
 use crate::math::{Real, Transcendentals};
 
 impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H> {
@@ -40,8 +40,8 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
         let mark = self.id_mark.min(H);
         self.mark = mark;
         (self.fast_until, self.stuck_until) = match self.mode {
-            MODE_SLIDE => (mark.saturating_sub(2), 0),
-            MODE_STUCK => (0, mark.saturating_sub(2)),
+            Mode::Slide => (mark.saturating_sub(2), 0),
+            Mode::Stuck => (0, mark.saturating_sub(2)),
             _ => (0, 0),
         };
         self.slots.get(next - 1).map_or(T::ZERO, |s| s.z[0])

@@ -1,7 +1,7 @@
 //! [`StickSlipEstimator::update`]: the per-sample paths, from the inline steady states to the
 //! general one, and the mode that selects them.
 
-use super::estimator::{unlikely, Slot, StickSlipEstimator, MODE_COLD, MODE_SLIDE, MODE_STUCK};
+use super::estimator::{unlikely, Mode, Slot, StickSlipEstimator};
 use super::maps::{sliding_map, stuck_step};
 use super::packed::{self, MAX_SWITCHES};
 use crate::math::{Real, Transcendentals};
@@ -61,10 +61,10 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
     #[inline(never)]
     pub(super) fn update_other(&mut self, table_accel: T, measured_top: T) -> T {
         let at = self.at;
-        if self.mode == MODE_SLIDE {
+        if self.mode == Mode::Slide {
             return self.update_edge(table_accel, measured_top);
         }
-        if self.mode == MODE_STUCK {
+        if self.mode == Mode::Stuck {
             if let (Some([prev, cur, ..]), true) =
                 (self.slots.get_mut(at..), table_accel.is_finite())
             {
@@ -91,7 +91,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
     #[inline(never)]
     pub(super) fn update_edge(&mut self, table_accel: T, measured_top: T) -> T {
         let at = self.at;
-        if self.mode == MODE_SLIDE {
+        if self.mode == Mode::Slide {
             if let (Some([prev, cur, ..]), true) =
                 (self.slots.get_mut(at..), table_accel.is_finite())
             {
@@ -139,7 +139,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
                 prev.u
             };
             let fr = self.fr.get(sp).copied().unwrap_or([T::ZERO; MAX_SWITCHES]);
-            let iv = if self.mode == MODE_COLD && k - 1 < self.plain_from {
+            let iv = if self.mode == Mode::Cold && k - 1 < self.plain_from {
                 self.iv.get(sp).copied().unwrap_or(0)
             } else {
                 packed::new(self.phase)
@@ -162,7 +162,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
             };
         }
         self.stored(pos, z[0]);
-        if self.mode == MODE_COLD {
+        if self.mode == Mode::Cold {
             // Interval k → k + 1 is plain in the current phase.
             self.set_fast_mode();
         }
@@ -185,8 +185,8 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
     pub(super) fn refresh_fast(&mut self) {
         let until = self.mark.saturating_sub(2);
         (self.fast_until, self.stuck_until) = match self.mode {
-            MODE_SLIDE => (until, 0),
-            MODE_STUCK => (0, until),
+            Mode::Slide => (until, 0),
+            Mode::Stuck => (0, until),
             _ => (0, 0),
         };
     }
@@ -195,10 +195,10 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
     /// sample k − 1.
     pub(super) fn set_fast_mode(&mut self) {
         if self.phase == 0 {
-            self.mode = MODE_STUCK;
+            self.mode = Mode::Stuck;
         } else {
             self.set_drive();
-            self.mode = MODE_SLIDE;
+            self.mode = Mode::Slide;
         }
         self.refresh_fast();
     }

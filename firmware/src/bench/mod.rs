@@ -24,7 +24,7 @@
 //!   only, else `predict_updates=0`);
 //! * `icount block batch=.. updates=.. loop_ticks=.. stuck_ticks=.. slide_ticks=.. errors=..`
 //!   (stick-slip and fixed-base models): the estimator's `update_block` on blocks of
-//!   `pipeline::BATCH` samples, as the pipeline runs it: stuck, and sliding with μ identified
+//!   `ssvr_proto::BATCH` samples, as the pipeline runs it: stuck, and sliding with μ identified
 //!   (stick-slip only, else `slide_ticks=0`); `errors` counts refused blocks (none expected);
 //! * `icount detector samples=.. loop_ticks=.. ramp_ticks=.. triangle_ticks=.. reversals=..`:
 //!   the reversal detector on a displacement ramp (sliding, a new extremum every sample: its
@@ -38,24 +38,22 @@
 //!   the phase detector on a stick and a ramp breakaway every 100 samples ([`stair_signal`]) and
 //!   on the same generator held stuck;
 //! * `icount pipeline samples=.. loop_ticks=.. step_ticks=..`: the firmware's whole step in
-//!   batches of `pipeline::BATCH` (flags, detector, estimator, frames; no I/O) on a ramp of half
+//!   batches of `ssvr_proto::BATCH` (flags, detector, estimator, frames; no I/O) on a ramp of half
 //!   the slope from −25 mm (sliding throughout, inside the displacement range), and the loop
 //!   alone (filling the batches);
 //! * `icount result instructions_per_tick=.. instructions_per_sample=.. instructions_per_reversal=..`
+
+mod detector;
+mod model;
+
+pub use model::BenchModel;
 
 use crate::plan::{Detector, Model};
 use core::hint::black_box;
 use core::sync::atomic::{compiler_fence, Ordering};
 use cortex_m::peripheral::syst::SystClkSource;
 use cortex_m::peripheral::SYST;
-use ssvr_core::detect::displacement::SlipEvent;
-use ssvr_core::recursion::Estimator32;
-use ssvr_core::stick_slip::{StickSlipCoefficients, StickSlipConfig};
-use ssvr_proto::model::StickSlipF32 as StickSlipEstimator;
-use ssvr_proto::{
-    DetectorInput, DetectorPlan, EventDetector, EventSource, Frame, Pipeline, Plan,
-    RectangularModel, Sample, StickSlipModel, BATCH,
-};
+use ssvr_proto::Plan;
 
 /// Steady-state updates timed in one block.
 pub const UPDATES: u32 = 10_000;
@@ -144,208 +142,13 @@ pub fn calibrate(t: &mut Ticks) -> (u32, u32) {
     (instructions, ticks)
 }
 
-/// The detector's input for the reversal block: a displacement triangle wave (reversal
-/// detector), or for the phase detector a slip acceleration with a reversal every 1.5·`half`
-/// samples (accelerate `half` samples at 1 m/s², decelerate at 2 m/s² until the slip velocity is
-/// zero, the friction flips); steady sliding when `half` exceeds the run.
-#[inline(always)]
-fn detector_signal(i: u32, half: u32) -> f32 {
-    if Detector::INPUT == DetectorInput::SlipAcceleration {
-        let period = half + half / 2;
-        let (q, m) = (i / period, i % period);
-        let d = if q % 2 == 0 { 1.0 } else { -1.0 };
-        if m < half {
-            d
-        } else {
-            -2.0 * d
-        }
-    } else {
-        triangle(i, half)
-    }
-}
-
-/// The detector's input for the stick block, per step of `period` samples: a displacement
-/// staircase (`rise` samples rising, then flat), or for the phase detector a slip acceleration
-/// stuck `rise` samples, then a ramp breakaway (20 samples), a deceleration to rest (20 samples)
-/// and a stick. `rise` = `period`: no event (a ramp; the phase detector stays stuck).
-#[inline(always)]
-fn stair_signal(i: u32, period: u32, rise: u32) -> f32 {
-    if Detector::INPUT == DetectorInput::SlipAcceleration {
-        let m = i % period;
-        if m < rise {
-            0.0
-        } else if m < rise + 20 {
-            0.2 * (m - rise + 1) as f32
-        } else if m < rise + 40 {
-            -2.0
-        } else {
-            0.0
-        }
-    } else {
-        staircase(i, period, rise)
-    }
-}
-
-/// Triangle wave of half period `half` samples (a ramp when `half` exceeds the run): the same
-/// instructions whatever `half` is.
-#[inline(always)]
-fn triangle(i: u32, half: u32) -> f32 {
-    let m = i % (2 * half);
-    let d = if m < half { m } else { 2 * half - m };
-    d as f32 * SLOPE_M
-}
-
-/// A staircase: rising at [`SLOPE_M`] per sample for `rise` samples of every `period`, flat for
-/// the rest (a ramp when `rise` = `period`): the same instructions whatever `rise` is.
-#[inline(always)]
-fn staircase(i: u32, period: u32, rise: u32) -> f32 {
-    let (q, m) = (i / period, i % period);
-    (q * rise + m.min(rise)) as f32 * SLOPE_M
-}
-
-/// Time the detector on a staircase (a stick and a slip start per step) against the same
-/// generator as a ramp; emit `icount detector_stick ..`.
-fn run_detector_sticks(t: &mut Ticks, plan: &Plan, det: &Detector) {
-    let (rise, period) = match plan.detector {
-        DetectorPlan::Displacement(cfg) => {
-            let rise = black_box(2 * cfg.fit_half as u32 + 10);
-            (
-                rise,
-                black_box(rise + cfg.stick_samples as u32 + 2 * cfg.fit_half as u32 + 10),
-            )
-        }
-        // Stuck 60 samples (longer than the slip start's search window), 40 sliding.
-        DetectorPlan::SlipAcceleration(_) => (black_box(60u32), black_box(100u32)),
-    };
-    let timed = |rise: u32, t: &mut Ticks| {
-        let mut d = det.clone();
-        for i in 0..rise {
-            black_box(d.process(stair_signal(i, period, rise)));
-        }
-        let (mut sticks, mut starts) = (0u32, 0u32);
-        let ticks = t.time(|| {
-            for i in rise..rise + STAIR_SAMPLES {
-                match black_box(&mut d).process(stair_signal(i, period, rise)) {
-                    Some(SlipEvent::Stick { .. }) => sticks += 1,
-                    Some(SlipEvent::SlipStart { .. }) => starts += 1,
-                    _ => {}
-                }
-            }
-        });
-        (ticks, sticks, starts)
-    };
-    let (ramp_ticks, _, _) = timed(period, t);
-    let (stair_ticks, sticks, starts) = timed(rise, t);
-    defmt::info!(
-        "icount detector_stick samples={=u32} ramp_ticks={=u32} stair_ticks={=u32} sticks={=u32} slip_starts={=u32}",
-        STAIR_SAMPLES,
-        ramp_ticks,
-        stair_ticks,
-        sticks,
-        starts
-    );
-}
-
-/// Time the detector on a ramp, a triangle and a staircase and the whole pipeline step on a
-/// ramp; emit the raw ticks (`icount detector ..`, `icount detector_stick ..`,
-/// `icount pipeline ..`).
-fn run_detector(t: &mut Ticks, plan: &Plan, model: &Model, det: &Detector) {
-    const WARMUP: u32 = 50;
-    let ramp = black_box(u32::MAX / 4);
-    let tri = black_box(TRIANGLE_HALF);
-    let loop_ticks = t.time(|| {
-        for i in WARMUP..WARMUP + DETECTOR_SAMPLES {
-            black_box(detector_signal(i, ramp));
-        }
-    });
-    let timed = |half: u32, t: &mut Ticks| {
-        let mut d = det.clone();
-        for i in 0..WARMUP {
-            black_box(d.process(detector_signal(i, half)));
-        }
-        let mut events: u32 = 0;
-        let ticks = t.time(|| {
-            for i in WARMUP..WARMUP + DETECTOR_SAMPLES {
-                if black_box(&mut d)
-                    .process(detector_signal(i, half))
-                    .is_some()
-                {
-                    events += 1;
-                }
-            }
-        });
-        (ticks, events)
-    };
-    let (ramp_ticks, _) = timed(ramp, t);
-    let (triangle_ticks, reversals) = timed(tri, t);
-    defmt::info!(
-        "icount detector samples={=u32} loop_ticks={=u32} ramp_ticks={=u32} triangle_ticks={=u32} reversals={=u32}",
-        DETECTOR_SAMPLES,
-        loop_ticks,
-        ramp_ticks,
-        triangle_ticks,
-        reversals
-    );
-    run_detector_sticks(t, plan, det);
-
-    // The ramp at half the slope from −25 mm: it stays inside the displacement range (±50 mm
-    // by default) over the whole block, so the detector slides throughout (beyond the range the
-    // samples are flagged, the detector sees a stall and reports a stick with its costly fit).
-    let sample = |i: u32| Sample {
-        channels: [0.5, 0.25, -0.125, 0.5 * triangle(i, ramp) - PIPELINE_X0_M],
-        flags: 0,
-        reversal: None,
-    };
-    // In batches of BATCH, as the images run it: the loop alone fills the batch and touches the
-    // frames.
-    let mut pipe = Pipeline::new(
-        model.clone(),
-        det.clone(),
-        EventSource::Detector,
-        plan.disp_range_m(),
-    );
-    let mut batch = [Sample::missing(0); BATCH];
-    let mut frames = [Frame::EMPTY; BATCH];
-    let fill = |batch: &mut [Sample; BATCH], from: u32| {
-        for (b, i) in batch.iter_mut().zip(from..) {
-            *b = sample(i);
-        }
-    };
-    for from in (0..WARMUP).step_by(BATCH) {
-        fill(&mut batch, from);
-        black_box(pipe.step_batch(&batch, &mut frames));
-    }
-    let from = WARMUP.next_multiple_of(BATCH as u32);
-    let batches = (from..from + DETECTOR_SAMPLES).step_by(BATCH);
-    let loop_ticks = t.time(|| {
-        for from in batches.clone() {
-            fill(&mut batch, from);
-            black_box(&mut batch);
-            black_box(&mut frames);
-        }
-    });
-    let step_ticks = t.time(|| {
-        for from in batches.clone() {
-            fill(&mut batch, from);
-            black_box(black_box(&mut pipe).step_batch(&batch, &mut frames));
-            black_box(&mut frames);
-        }
-    });
-    defmt::info!(
-        "icount pipeline samples={=u32} loop_ticks={=u32} step_ticks={=u32}",
-        DETECTOR_SAMPLES,
-        loop_ticks,
-        step_ticks
-    );
-}
-
 /// Time [`UPDATES`] steady-state updates of the compiled-in model and [`REVERSALS`] samples that
 /// each push an event (alternating ±1, age 0.5 samples) before their update; emit raw ticks and
-/// the derived instruction counts; then the detector and the pipeline ([`run_detector`]).
+/// the derived instruction counts; then the detector and the pipeline (`detector::run_detector`).
 /// `model` and `det` should be freshly built from `plan`.
 pub fn run(t: &mut Ticks, plan: &Plan, model: Model, det: Detector) {
     let (cal_instr, cal_ticks) = calibrate(t);
-    run_detector(t, plan, &model, &det);
+    detector::run_detector(t, plan, &model, &det);
     let ipt = if cal_ticks == 0 {
         0.0
     } else {
@@ -381,233 +184,4 @@ pub fn run(t: &mut Ticks, plan: &Plan, model: Model, det: Detector) {
         per_reversal_sample - per_sample,
         per_reversal_sample
     );
-}
-
-/// What the benchmark measures of a model's estimator: (steady-state update ticks, events
-/// pushed, the ticks of their samples, rejected events), emitting the model's own messages.
-pub trait BenchModel: Clone {
-    /// Time the model's estimator.
-    fn estimator_blocks(&self, t: &mut Ticks, plan: &Plan) -> (u32, u32, u32, u32);
-}
-
-impl BenchModel for RectangularModel {
-    /// Steady sliding updates and samples with a reversal (±1 alternating, age 0.5).
-    fn estimator_blocks(&self, t: &mut Ticks, _plan: &Plan) -> (u32, u32, u32, u32) {
-        rectangular_blocks(t, self.estimator().clone())
-    }
-}
-
-impl<const H: usize, const EVENTS: bool> BenchModel for StickSlipModel<H, EVENTS> {
-    /// The stick-slip model (events on) or the fixed-base model (events off).
-    fn estimator_blocks(&self, t: &mut Ticks, plan: &Plan) -> (u32, u32, u32, u32) {
-        let est = self.estimator().clone();
-        if plan.model == ssvr_proto::ModelKind::StickSlip {
-            stick_slip_blocks(t, plan, est)
-        } else {
-            fixed_base_blocks(t, plan, est)
-        }
-    }
-}
-
-/// The rectangular model: (steady-state update ticks, reversals, their ticks, rejected).
-fn rectangular_blocks(t: &mut Ticks, mut est: Estimator32) -> (u32, u32, u32, u32) {
-    // Enter the sliding state and let the response settle into its steady recursion.
-    let mut errors: u32 = 0;
-    if est.push_reversal(1.0, 0.0).is_err() {
-        errors += 1;
-    }
-    for _ in 0..1000 {
-        black_box(est.update());
-    }
-    let update_ticks = t.time(|| {
-        for _ in 0..UPDATES {
-            black_box(black_box(&mut est).update());
-        }
-    });
-    let mut level = -1.0f32;
-    let reversal_ticks = t.time(|| {
-        for _ in 0..REVERSALS {
-            let e = black_box(&mut est);
-            if e.push_reversal(level, 0.5).is_err() {
-                errors += 1;
-            }
-            black_box(e.update());
-            level = -level;
-        }
-    });
-    (update_ticks, REVERSALS, reversal_ticks, errors)
-}
-
-/// Inputs of the stick-slip benchmark: a table and a top acceleration (m/s²).
-fn inputs() -> (f32, f32) {
-    (black_box(0.75), black_box(-1.25))
-}
-
-/// Steady-state stuck updates of a fresh stick-slip estimator: its ticks (`icount stick_slip`).
-fn stuck_block<const H: usize>(t: &mut Ticks, plan: &Plan, est: &StickSlipEstimator<H>) -> u32 {
-    let mut e = est.clone();
-    let (u, y) = inputs();
-    for _ in 0..1000 + plan.history {
-        black_box(e.update(u, y));
-    }
-    t.time(|| {
-        for _ in 0..UPDATES {
-            black_box(black_box(&mut e).update(u, y));
-        }
-    })
-}
-
-/// Steady-state samples of the estimator in blocks of [`BATCH`] (`update_block`, as the
-/// pipeline runs it): stuck, and sliding with μ identified (stick-slip model; fixed-base: 0).
-/// Emits `icount block batch=.. updates=.. loop_ticks=.. stuck_ticks=.. slide_ticks=..`.
-fn block_runs<const H: usize>(t: &mut Ticks, plan: &Plan, est: &StickSlipEstimator<H>) {
-    let blocks = UPDATES / BATCH as u32;
-    let (u, y) = inputs();
-    let (table, top) = ([u; BATCH], [y; BATCH]);
-    let mut out = [0.0f32; BATCH];
-    let loop_ticks = t.time(|| {
-        for i in 0..blocks {
-            black_box(i);
-            black_box(&mut out);
-        }
-    });
-    // Warm up (past the history and the first identification blocks), then time.
-    let warmup = (1000 + plan.history) / BATCH + 1;
-    let time_blocks = |t: &mut Ticks, e: &mut StickSlipEstimator<H>, out: &mut [f32; BATCH]| {
-        let mut errors = 0u32;
-        for _ in 0..warmup {
-            errors += u32::from(e.update_block(&table, &top, out).is_err());
-        }
-        let ticks = t.time(|| {
-            for _ in 0..blocks {
-                let e = black_box(&mut *e);
-                errors += u32::from(
-                    e.update_block(black_box(&table), black_box(&top), out)
-                        .is_err(),
-                );
-                black_box(&mut *out);
-            }
-        });
-        (ticks, errors)
-    };
-    let mut stuck = est.clone();
-    let (stuck_ticks, mut errors) = time_blocks(t, &mut stuck, &mut out);
-    let slide_ticks = if plan.model == ssvr_proto::ModelKind::StickSlip {
-        let mut slide = est.clone();
-        errors += u32::from(slide.push_event(1, 0.0).is_err());
-        let (ticks, e) = time_blocks(t, &mut slide, &mut out);
-        errors += e;
-        ticks
-    } else {
-        0
-    };
-    defmt::info!(
-        "icount block batch={=u32} updates={=u32} loop_ticks={=u32} stuck_ticks={=u32} slide_ticks={=u32} errors={=u32}",
-        BATCH as u32,
-        blocks * BATCH as u32,
-        loop_ticks,
-        stuck_ticks,
-        slide_ticks,
-        errors
-    );
-}
-
-/// The stick-slip model: steady sliding samples (μ identified on every block: the history is full
-/// and the delayed samples slide), events at age 0.5, events at the largest age; and the stuck
-/// samples (`icount stick_slip`).
-fn stick_slip_blocks<const H: usize>(
-    t: &mut Ticks,
-    plan: &Plan,
-    est: StickSlipEstimator<H>,
-) -> (u32, u32, u32, u32) {
-    let max_age = plan.max_age as f32;
-    block_runs(t, plan, &est);
-    let stuck_ticks = stuck_block(t, plan, &est);
-    let mut est = est;
-    let (u, y) = inputs();
-    let mut errors: u32 = 0;
-    if est.push_event(1, 0.0).is_err() {
-        errors += 1;
-    }
-    for _ in 0..1000 + plan.history {
-        black_box(est.update(u, y));
-    }
-    let update_ticks = t.time(|| {
-        for _ in 0..UPDATES {
-            black_box(black_box(&mut est).update(u, y));
-        }
-    });
-    let mut level: i8 = -1;
-    let reversal_ticks = t.time(|| {
-        for _ in 0..REVERSALS {
-            let e = black_box(&mut est);
-            if e.push_event(level, 0.5).is_err() {
-                errors += 1;
-            }
-            black_box(e.update(u, y));
-            level = -level;
-        }
-    });
-    // The prediction alone: the same estimator without the identification.
-    let bare_config = StickSlipConfig {
-        identify_mu: false,
-        ..plan.stick_slip
-    };
-    let mut bare = StickSlipCoefficients::from_bits(&plan.coefficients)
-        .and_then(|c| StickSlipEstimator::<H>::from_coefficients(c, bare_config, plan.history).ok())
-        .unwrap_or_else(|| est.clone());
-    if bare.push_event(1, 0.0).is_err() {
-        errors += 1;
-    }
-    for _ in 0..1000 + plan.history {
-        black_box(bare.update(u, y));
-    }
-    let predict_ticks = t.time(|| {
-        for _ in 0..UPDATES {
-            black_box(black_box(&mut bare).update(u, y));
-        }
-    });
-    let age = black_box(max_age);
-    let long_event_ticks = t.time(|| {
-        for _ in 0..LONG_EVENTS {
-            let e = black_box(&mut est);
-            if e.push_event(level, age).is_err() {
-                errors += 1;
-            }
-            black_box(e.update(u, y));
-            level = -level;
-        }
-    });
-    defmt::info!(
-        "icount stick_slip stuck_updates={=u32} stuck_ticks={=u32} long_events={=u32} long_event_ticks={=u32} max_age={=f32} predict_updates={=u32} predict_ticks={=u32}",
-        UPDATES,
-        stuck_ticks,
-        LONG_EVENTS,
-        long_event_ticks,
-        max_age,
-        UPDATES,
-        predict_ticks
-    );
-    (update_ticks, REVERSALS, reversal_ticks, errors)
-}
-
-/// The fixed-base model: steady stuck samples (no event is ever pushed).
-fn fixed_base_blocks<const H: usize>(
-    t: &mut Ticks,
-    plan: &Plan,
-    est: StickSlipEstimator<H>,
-) -> (u32, u32, u32, u32) {
-    block_runs(t, plan, &est);
-    let stuck_ticks = stuck_block(t, plan, &est);
-    defmt::info!(
-        "icount stick_slip stuck_updates={=u32} stuck_ticks={=u32} long_events={=u32} long_event_ticks={=u32} max_age={=f32} predict_updates={=u32} predict_ticks={=u32}",
-        UPDATES,
-        stuck_ticks,
-        0u32,
-        0u32,
-        0.0f32,
-        0u32,
-        0u32
-    );
-    (stuck_ticks, 0, 0, 0)
 }
