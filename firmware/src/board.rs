@@ -112,8 +112,8 @@ pub fn run() -> ! {
     };
     let painted = stack::paint();
     let plan = plan::PLAN;
-    // `plan digest=.. model=.. rate_hz=.. ..`: the host (`host-sim monitor`, or by hand with
-    // `host-sim`'s plan of the scene) checks the image runs the plan it expects.
+    // `plan digest=.. model=.. rate_hz=.. ..`: the digest of the plan the image runs, for the host
+    // to compare with its own plan of the scene and model.
     plan::emit();
 
     // 8 MHz HSE from the ST-LINK MCO (bypass), 180 MHz core.

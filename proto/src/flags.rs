@@ -21,5 +21,7 @@ pub const ADC_ERROR: u8 = 1 << 6;
 pub const DISP_INVALID: u8 = 1 << 7;
 /// Any of the flags that make a measured channel unusable.
 pub const INVALID: u8 = NOT_FINITE | SATURATED | MISSING | ADC_ERROR | DISP_INVALID;
-/// The flags an acquisition may set on a [`crate::Sample`] (the pipeline adds the others).
-pub const ACQUISITION: u8 = SATURATED | MISSING | ADC_ERROR | DISP_INVALID;
+/// The flags an acquisition may set on a [`crate::Sample`] (the pipeline adds the others):
+/// `OVERRUN` too, when the acquiring side had to drop samples before this one (the board's
+/// sample interrupt).
+pub const ACQUISITION: u8 = SATURATED | MISSING | ADC_ERROR | DISP_INVALID | OVERRUN;
