@@ -1,0 +1,317 @@
+//! The report of a run (`--json` prints it: [`RunReport`] with the truth's, the estimator's and
+//! the detector's figures) and its human summary ([`summary_text`]); the scene's name in messages
+//! ([`scene_label`]) and the check that `run` can simulate a scene ([`check_runnable`]).
+
+use super::events::{count, DetectionStats, EventMark};
+use crate::scene::{Input, Scene};
+use crate::truth::{self, EventKind, Truth};
+use anyhow::{bail, Result};
+use serde::Serialize;
+use ssvr_proto::{DetectorPlan, Plan};
+
+/// The truth's figures.
+#[derive(Debug, Clone, Serialize)]
+pub struct TruthStats {
+    /// Peak |ü1| of the exact response (continuous in time, not only at samples) (m/s²).
+    pub peak_top_accel_m_s2: f64,
+    /// Time of that peak (s).
+    pub peak_top_accel_time_s: f64,
+    /// Largest |slip| (m).
+    pub max_abs_slip_m: f64,
+    /// Slip at the end (m).
+    pub final_slip_m: f64,
+    /// Slip phases: slip starts + reversals over the whole simulation.
+    pub slip_phases: usize,
+    /// Slip starts up to the last sample.
+    pub slip_starts: usize,
+    /// Reversals up to the last sample.
+    pub reversals: usize,
+    /// Sticks up to the last sample.
+    pub sticks: usize,
+}
+
+impl TruthStats {
+    /// The figures of `truth` whose events up to the last sample `last_t_s` are `true_events`.
+    pub(super) fn of(truth: &Truth, last_t_s: f64, true_events: &[EventMark]) -> Self {
+        let events: &[truth::Event] = truth.events();
+        Self {
+            peak_top_accel_m_s2: truth.peak_top_accel_m_s2(),
+            peak_top_accel_time_s: truth.peak_top_accel_time_s(),
+            max_abs_slip_m: truth.max_abs_slip_m(),
+            final_slip_m: truth.final_slip_m(),
+            slip_phases: truth.slip_phases(),
+            slip_starts: events
+                .iter()
+                .filter(|e| e.time_s <= last_t_s && matches!(e.kind, EventKind::SlipStart { .. }))
+                .count(),
+            reversals: events
+                .iter()
+                .filter(|e| e.time_s <= last_t_s && matches!(e.kind, EventKind::Reversal { .. }))
+                .count(),
+            sticks: count(true_events, true),
+        }
+    }
+}
+
+/// The estimator's figures (errors against the truth's ü1 over every sample).
+#[derive(Debug, Clone, Serialize)]
+pub struct EstimatorStats {
+    /// The model ("fixed-base", "rectangular", "stick-slip").
+    pub model: &'static str,
+    /// Why this model (chosen from the simulated run, or "--model").
+    pub model_reason: String,
+    /// The identified friction coefficient (stick-slip model; null otherwise).
+    pub mu_estimate: Option<f64>,
+    /// Its standard deviation.
+    pub mu_std: Option<f64>,
+    /// Delay after which a prediction is revised by late events (ms; null for the rectangular model).
+    pub revision_delay_ms: Option<f64>,
+    /// max |revised prediction − truth| (m/s²): the prediction of each sample as revised once its
+    /// events are detected (stick-slip model; null otherwise).
+    pub revised_max_err_m_s2: Option<f64>,
+    /// RMS of revised prediction − truth (m/s²).
+    pub revised_rms_err_m_s2: Option<f64>,
+    /// `revised_max_err_m_s2` in % of the truth's peak |ü1|.
+    pub revised_max_err_pct_of_peak: Option<f64>,
+    /// `revised_rms_err_m_s2` in % of the truth's peak |ü1|.
+    pub revised_rms_err_pct_of_peak: Option<f64>,
+    /// The rectangular model's max |error| on the same detected events (for comparison; m/s²).
+    pub rectangular_max_err_m_s2: f64,
+    /// The rectangular model's RMS error (m/s²).
+    pub rectangular_rms_err_m_s2: f64,
+    /// "f32" (as on the firmware).
+    pub precision: &'static str,
+    /// What a stick does to the estimator ("keep" or "zero").
+    pub on_stick: &'static str,
+    /// Peak |predicted ü1| over the samples (m/s²).
+    pub peak_predicted_m_s2: f64,
+    /// Peak |measured ü1| over the samples (m/s²).
+    pub peak_measured_m_s2: f64,
+    /// Peak |truth ü1| over the samples (m/s²).
+    pub peak_truth_sampled_m_s2: f64,
+    /// max |predicted − truth| (m/s²).
+    pub max_err_m_s2: f64,
+    /// Time of the largest error (s).
+    pub max_err_at_s: f64,
+    /// RMS of predicted − truth (m/s²).
+    pub rms_err_m_s2: f64,
+    /// `max_err_m_s2` in % of the truth's peak |ü1|.
+    pub max_err_pct_of_peak: f64,
+    /// `rms_err_m_s2` in % of the truth's peak |ü1|.
+    pub rms_err_pct_of_peak: f64,
+    /// max |ideal − truth| (m/s²): the estimator fed the true events (model error only).
+    pub ideal_max_err_m_s2: f64,
+    /// RMS of ideal − truth (m/s²).
+    pub ideal_rms_err_m_s2: f64,
+    /// max |measured − truth| (m/s²): the top accelerometer's own error, for scale.
+    pub measured_max_err_m_s2: f64,
+    /// Slip starts + reversals detected (the events pushed into the estimator).
+    pub reversals_detected: usize,
+    /// Slip starts + reversals of the truth up to the last sample.
+    pub reversals_true: usize,
+    /// Sticks detected (pushed as level 0 only with `on_stick = zero`).
+    pub sticks_detected: usize,
+    /// Sticks of the truth up to the last sample.
+    pub sticks_true: usize,
+}
+
+/// The report of a run (`--json` prints it).
+#[derive(Debug, Clone, Serialize)]
+pub struct RunReport {
+    /// Scene name.
+    pub scene: String,
+    /// Scene file, `null` for the built-in default.
+    pub scene_file: Option<String>,
+    /// Input kind.
+    pub input: &'static str,
+    /// Samples (= CSV rows).
+    pub samples: u64,
+    /// Sample rate (Hz).
+    pub rate_hz: f64,
+    /// Duration (s).
+    pub duration_s: f64,
+    /// The CSV output.
+    pub out: String,
+    /// Detector settings.
+    pub detector: DetectorReport,
+    /// The truth.
+    pub truth: TruthStats,
+    /// The estimator.
+    pub estimator: EstimatorStats,
+    /// Detection.
+    pub detection: DetectionStats,
+    /// Wall-clock time of the run (s), filled by the caller (0 until then).
+    pub runtime_s: f64,
+}
+
+/// The detector's settings in a report.
+#[derive(Debug, Clone, Serialize)]
+pub struct DetectorReport {
+    /// Which detector the model uses: `slip-displacement` or `slip-acceleration`.
+    pub kind: &'static str,
+    /// Ring length N.
+    pub ring: usize,
+    /// The longest back-dating of its events (samples).
+    pub max_age_samples: usize,
+    /// Displacement detector: hysteresis (m).
+    pub hysteresis_m: Option<f64>,
+    /// Displacement detector: fit half-width (samples).
+    pub fit_half: Option<usize>,
+    /// Displacement detector: samples to declare a stick.
+    pub stick_samples: Option<usize>,
+    /// Acceleration detector: |base − table acceleration| threshold (m/s²).
+    pub threshold_m_s2: Option<f64>,
+    /// Acceleration detector: samples of |s̈| below the threshold to declare a stick without a jump.
+    pub stall_samples: Option<usize>,
+}
+
+impl DetectorReport {
+    pub(super) fn of(plan: &Plan) -> Self {
+        let mut r = Self {
+            kind: "",
+            ring: plan.ring,
+            max_age_samples: plan.max_age,
+            hysteresis_m: None,
+            fit_half: None,
+            stick_samples: None,
+            threshold_m_s2: None,
+            stall_samples: None,
+        };
+        match plan.detector {
+            DetectorPlan::Displacement(c) => {
+                r.kind = "slip-displacement";
+                r.hysteresis_m = Some(c.hysteresis_m as f64);
+                r.fit_half = Some(c.fit_half);
+                r.stick_samples = Some(c.stick_samples);
+            }
+            DetectorPlan::SlipAcceleration(c) => {
+                r.kind = "slip-acceleration";
+                r.threshold_m_s2 = Some(c.threshold_m_s2 as f64);
+                r.stall_samples = Some(c.stall_samples);
+            }
+        }
+        r
+    }
+}
+
+/// The scene's name for messages: its file, or "the built-in default scene".
+pub fn scene_label(scene: &Scene) -> String {
+    match &scene.source {
+        Some(p) => p.display().to_string(),
+        None => "the built-in default scene".into(),
+    }
+}
+
+/// Reject scenes `run` cannot simulate (a prescribed reversal train has no table motion).
+pub fn check_runnable(scene: &Scene) -> Result<()> {
+    if let Input::Reversals(_) = scene.input {
+        bail!(
+            "{}: [input] kind = \"reversals\" prescribes the friction train and has no table motion, \
+             so there is no stick-slip truth to measure: `run` needs kind = \"harmonic\" or \"record\" \
+             (use `check` or `trace` for a reversals scene)",
+            scene_label(scene)
+        );
+    }
+    Ok(())
+}
+
+/// The human summary.
+pub fn summary_text(r: &RunReport) -> String {
+    let mut s = String::new();
+    let t = &r.truth;
+    let e = &r.estimator;
+    let d = &r.detection;
+    let opt = |x: Option<f64>, p: usize| x.map_or("n/a".to_string(), |v| format!("{v:.p$}"));
+    let file = r
+        .scene_file
+        .as_deref()
+        .map_or("built-in default scene".to_string(), |f| f.to_string());
+    s += &format!(
+        "host-sim run: \"{}\" ({file}, {} input): {} samples at {} Hz ({} s)\n",
+        r.scene, r.input, r.samples, r.rate_hz, r.duration_s
+    );
+    s += &format!(
+        "  truth: peak |ü1| {:.4} m/s² at t = {:.4} s; max |slip| {:.3} mm, final slip {:.3} mm; \
+         {} slip start(s), {} reversal(s), {} stick(s)\n",
+        t.peak_top_accel_m_s2,
+        t.peak_top_accel_time_s,
+        1e3 * t.max_abs_slip_m,
+        1e3 * t.final_slip_m,
+        t.slip_starts,
+        t.reversals,
+        t.sticks
+    );
+    s += &format!(
+        "  peak |ü1| at the samples: measured {:.4}, predicted {:.4}, truth {:.4} m/s²\n",
+        e.peak_measured_m_s2, e.peak_predicted_m_s2, e.peak_truth_sampled_m_s2
+    );
+    s += &format!("  model: {} ({})", e.model, e.model_reason);
+    if let (Some(mu), Some(sd)) = (e.mu_estimate, e.mu_std) {
+        s += &format!("; identified mu = {mu:.5} ± {sd:.5}");
+    }
+    s += "\n";
+    s += &format!(
+        "  estimator ({}, f32, detected events, on stick: {}) vs truth: max |error| {:.4} m/s² ({:.2} % of peak) at t = {:.4} s, \
+         rms {:.4} m/s² ({:.2} %)\n",
+        e.model,
+        e.on_stick,
+        e.max_err_m_s2,
+        e.max_err_pct_of_peak,
+        e.max_err_at_s,
+        e.rms_err_m_s2,
+        e.rms_err_pct_of_peak
+    );
+    if let (Some(m), Some(r), Some(mp), Some(rp), Some(d)) = (
+        e.revised_max_err_m_s2,
+        e.revised_rms_err_m_s2,
+        e.revised_max_err_pct_of_peak,
+        e.revised_rms_err_pct_of_peak,
+        e.revision_delay_ms,
+    ) {
+        s += &format!(
+            "  revised prediction ({d:.1} ms later, after late events re-simulate the history): max |error| {m:.4} m/s² ({mp:.2} %), rms {r:.4} m/s² ({rp:.2} %)\n"
+        );
+    }
+    if e.model != "rectangular" {
+        s += &format!(
+            "  rectangular model (the paper's, same events) for comparison: max |error| {:.4} m/s², rms {:.4} m/s²\n",
+            e.rectangular_max_err_m_s2, e.rectangular_rms_err_m_s2
+        );
+    }
+    s += &format!(
+        "  same estimator fed the true events (model error only): max |error| {:.4} m/s², rms {:.4} m/s²; \
+         top accelerometer: max |error| {:.4} m/s²\n",
+        e.ideal_max_err_m_s2, e.ideal_rms_err_m_s2, e.measured_max_err_m_s2
+    );
+    let how = match (r.detector.hysteresis_m, r.detector.threshold_m_s2) {
+        (Some(h), _) => format!("slip displacement, hysteresis {:.1} µm", 1e6 * h),
+        (_, Some(a)) => format!("slip acceleration, threshold {a:.3} m/s²"),
+        _ => String::new(),
+    };
+    s += &format!(
+        "  detection ({how}, ring {}): slip starts + reversals {} detected, {} true; \
+         {} matched, {} missed, {} false (±{} ms); sticks {} detected, {} true\n",
+        r.detector.ring,
+        e.reversals_detected,
+        e.reversals_true,
+        d.matched,
+        d.missed,
+        d.false_,
+        d.match_tolerance_ms,
+        e.sticks_detected,
+        e.sticks_true
+    );
+    s += &format!(
+        "  latency mean {} ms, max {} ms; event-time error (back-dated) mean {} ms, rms {} ms, max {} ms\n",
+        opt(d.latency_mean_ms, 2),
+        opt(d.latency_max_ms, 2),
+        opt(d.timing_err_mean_ms, 4),
+        opt(d.timing_err_rms_ms, 4),
+        opt(d.timing_err_max_ms, 4)
+    );
+    s += &format!(
+        "  out: {} ({} rows); runtime {:.2} s\n",
+        r.out, r.samples, r.runtime_s
+    );
+    s
+}
