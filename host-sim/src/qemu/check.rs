@@ -266,13 +266,13 @@ fn same_bits(a: f32, b: f32) -> bool {
     a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan())
 }
 
-/// Run the whole comparison for a scene with the model [`model::choose`] picks (see the module
+/// Run the whole comparison for a scene with the model [`crate::model::choose`] picks (see the module
 /// docs).
 pub fn run_scene(scene: &Scene, firmware_dir: &Path) -> Result<QemuReport> {
     run_scene_model(scene, firmware_dir, None)
 }
 
-/// Run the whole comparison for a scene with `model` (None: the one [`model::choose`] picks from
+/// Run the whole comparison for a scene with `model` (None: the one [`crate::model::choose`] picks from
 /// the simulated truth, as `host-sim run` does).
 pub fn run_scene_model(
     scene: &Scene,

@@ -6,7 +6,7 @@
 //! * [`decode`]: the defmt stream decoded by type into messages and `ssvr_proto::Frame`s;
 //! * [`icount`]: the instruction counts the image measures;
 //! * [`check`]: the comparisons and the goals ([`check::QemuReport`]);
-//! * [`reference`]: the full-precision references of each model;
+//! * [`reference`](mod@reference): the full-precision references of each model;
 //! * [`report`]: printing and the command.
 
 pub mod check;

@@ -4,27 +4,28 @@
 //!
 //! 1. the exact stick-slip truth ([`crate::truth`]) at t_k,
 //! 2. the sensors ([`crate::sensors`]: seeded noise, ADC, saturation) measure it,
-//! 3. the model's friction-event detector ([`model::Detector`]) processes the measurement: for the
-//!    rectangular and fixed-base models the reversal detector (`ReversalDetector`, configured by
-//!    `DetectorConfig::for_noise` from the scene's displacement noise and rate) on the measured
-//!    base-to-table displacement; for the stick-slip model the phase detector (`PhaseDetector`,
-//!    `PhaseDetectorConfig::for_noise` from the accelerometer noise) on the measured slip
-//!    acceleration, base minus table accelerometer, whose sticks and slip starts it times to a
-//!    fraction of a sample,
-//! 4. a detected slip start or reversal is pushed into the firmware's estimator ([`Estimator32`]: f32,
-//!    the same code as the firmware) with its friction level and back-dated age,
-//!    `push_reversal(event.friction_level(), event.age_samples())`, before the `update()` that
-//!    predicts ü1 at t_k. By default ([`StickPolicy::Keep`]) a detected **stick does not change the
-//!    estimator**: the rectangular model (eq 36) only knows the two sliding levels ±F0, and during
-//!    a stick the friction is the holding force (unknown to the estimator), so the last level is
-//!    kept until the next slip start or reversal (a slip start in the same direction as before the
-//!    stick is then a no-op). [`StickPolicy::Zero`] pushes level 0 at a stick instead (the
-//!    generalised eq 36 with a zero level while stuck),
+//! 3. the firmware's pipeline step ([`crate::pipeline`]: `ssvr_proto::Pipeline`, built from the
+//!    plan the firmware compiles in for this scene and model, so these are the firmware's
+//!    predictions) flags the sample and runs the model's friction-event detector on it: for the
+//!    rectangular and fixed-base models the reversal detector on the measured base-to-table
+//!    displacement (`DetectorConfig::for_noise` of the scene's displacement noise and rate, the
+//!    firmware's ring); for the stick-slip model the phase detector on the measured slip
+//!    acceleration, base minus table accelerometer (`PhaseDetectorConfig::for_noise` of the
+//!    accelerometer noise), whose sticks and slip starts it times to a fraction of a sample,
+//! 4. the detected event goes, with its friction level and back-dated age, into the model before
+//!    the prediction of t_k: the rectangular recursion ([`Estimator32`], f32) takes slip starts and
+//!    reversals (`push_reversal(level, age)`); by default ([`StickPolicy::Keep`]) a detected
+//!    **stick does not change it**: the rectangular model (eq 36) only knows the two sliding
+//!    levels ±F0, and during a stick the friction is the holding force (unknown to the
+//!    estimator), so the last level is kept until the next slip start or reversal.
+//!    [`StickPolicy::Zero`] pushes level 0 at a stick instead (the generalised eq 36 with a zero
+//!    level while stuck). The stick-slip model takes every event (its age clamped to the plan's
+//!    longest back-dating), the fixed-base model none,
 //! 5. one CSV row ([`CSV_HEADER`]) is written as soon as it is computed.
 //!
-//! Next to it a second `Estimator32` is fed the truth's own slip starts and reversals at their exact
-//! times (sticks ignored the same way): its error ("ideal") is the error of the rectangular model
-//! itself, without detection errors.
+//! Next to it a second instance of the model is fed the truth's own events at their exact times
+//! (sticks treated the same way): its error ("ideal") is the error of the model itself, without
+//! detection errors; and the rectangular recursion runs on the detected events for comparison.
 //!
 //! Detection statistics: each detected slip start/reversal, at its back-dated time
 //! t_est = t_k − age/rate, is matched to the nearest not yet matched true slip start/reversal
