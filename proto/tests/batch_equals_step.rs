@@ -55,7 +55,7 @@ fn sample(k: usize) -> Sample {
         channels: [table, table + slip_accel, top, disp],
         flags: 0,
         reversal: (k % 997 == 5).then_some(LogReversal {
-            level: if (k / 997) % 2 == 0 { 1 } else { -1 },
+            level: if (k / 997).is_multiple_of(2) { 1 } else { -1 },
             age_samples: 0.25 + (k % 3) as f32,
         }),
     };
