@@ -8,6 +8,9 @@ use super::{Ticks, DETECTOR_SAMPLES, PIPELINE_X0_M, SLOPE_M, STAIR_SAMPLES, TRIA
 use crate::plan::{Detector, Model};
 use core::hint::black_box;
 use ssvr_core::detect::displacement::SlipEvent;
+/// Samples at rest before the phase detector's signal (inside the warm-up).
+const REST: u32 = 32;
+
 use ssvr_proto::{
     DetectorInput, DetectorPlan, EventDetector, EventSource, Frame, Pipeline, Plan, Sample, BATCH,
 };
@@ -15,10 +18,14 @@ use ssvr_proto::{
 /// The detector's input for the reversal block: a displacement triangle wave (reversal
 /// detector), or for the phase detector a slip acceleration with a reversal every 1.5·`half`
 /// samples (accelerate `half` samples at 1 m/s², decelerate at 2 m/s² until the slip velocity is
-/// zero, the friction flips); steady sliding when `half` exceeds the run.
+/// zero, the friction flips), after [`REST`] samples at rest (the detector takes its first samples
+/// for the accelerometers' offset); steady sliding when `half` exceeds the run.
 #[inline(always)]
 fn detector_signal(i: u32, half: u32) -> f32 {
     if Detector::INPUT == DetectorInput::SlipAcceleration {
+        let Some(i) = i.checked_sub(REST) else {
+            return 0.0;
+        };
         let period = half + half / 2;
         let (q, m) = (i / period, i % period);
         let d = if q % 2 == 0 { 1.0 } else { -1.0 };
