@@ -66,10 +66,8 @@ pub fn detector(plan: &Plan) -> Result<Detector, PlanFault> {
 
 /// The pipeline of the plan at sample 0, its events from `source`.
 pub fn pipeline(plan: &Plan, source: EventSource) -> Result<ImagePipeline, PlanFault> {
-    Ok(Pipeline::new(
-        model(plan)?,
-        detector(plan)?,
-        source,
-        plan.disp_range_m(),
-    ))
+    Ok(
+        Pipeline::new(model(plan)?, detector(plan)?, source, plan.disp_range_m())
+            .with_rest(plan.rest_samples),
+    )
 }

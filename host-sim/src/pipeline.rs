@@ -50,12 +50,9 @@ fn with<M: ssvr_proto::Model + 'static, D: EventDetector + 'static>(
     opts: Options,
 ) -> Result<Box<dyn Step>> {
     let d = D::from_plan(plan).map_err(|e| anyhow!("detector: {e}"))?;
-    Ok(Box::new(Pipeline::new(
-        model,
-        d,
-        opts.source,
-        plan.disp_range_m(),
-    )))
+    Ok(Box::new(
+        Pipeline::new(model, d, opts.source, plan.disp_range_m()).with_rest(plan.rest_samples),
+    ))
 }
 
 fn with_model<D: EventDetector + 'static>(plan: &Plan, opts: Options) -> Result<Box<dyn Step>> {
@@ -142,12 +139,14 @@ pub fn model(plan: &Plan, opts: Options) -> Result<Box<dyn ssvr_proto::Model>> {
 }
 
 /// Drive a model alone one sample at a time: push `event` (if any), then predict the sample
-/// `s` (the pipeline's steps 3–4 without a detector). Returns the prediction and whether the
-/// model used the event.
+/// `s`, less the accelerometers' `offsets` (table, base, top: the pipeline's, so that the model
+/// sees what the pipeline's model sees; the pipeline's steps 3–4 without a detector). Returns
+/// the prediction and whether the model used the event.
 pub fn model_step(
     model: &mut dyn ssvr_proto::Model,
     event: Option<&ssvr_proto::Event>,
     s: &Sample,
+    offsets: [f32; 3],
 ) -> Result<(f32, bool), ssvr_core::Error> {
     let mut frame = ssvr_proto::Frame {
         channels: s.channels,
@@ -158,7 +157,11 @@ pub fn model_step(
         Some(e) => model.push(e)? != ssvr_proto::Pushed::No,
         None => false,
     };
-    model.note_inputs(0, &frame);
+    let mut channels = s.channels;
+    for (c, o) in channels.iter_mut().zip(offsets) {
+        *c -= o;
+    }
+    model.note_inputs(0, &channels, s.flags);
     model.predict_run(core::slice::from_mut(&mut frame), 0);
     Ok((frame.prediction, used))
 }

@@ -62,6 +62,11 @@ pub trait EventDetector: Sized {
     fn process(&mut self, x: f32) -> Option<SlipEvent>;
     /// The longest back-dating of its events (samples).
     fn max_age_samples(&self) -> usize;
+    /// The offset of its input it tracks and removes (the slip acceleration's; 0 for the
+    /// displacement, whose offset does not matter to its extrema).
+    fn offset(&self) -> f32 {
+        0.0
+    }
 }
 
 impl<const N: usize> EventDetector for ReversalDetector<N> {
@@ -105,5 +110,9 @@ impl<const N: usize> EventDetector for PhaseDetector<N> {
 
     fn max_age_samples(&self) -> usize {
         self.config().max_age_samples()
+    }
+
+    fn offset(&self) -> f32 {
+        PhaseDetector::offset(self)
     }
 }

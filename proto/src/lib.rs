@@ -9,6 +9,7 @@
 //!   history sizes, stick-slip settings and coefficients), as words the firmware's build embeds;
 //! * [`model`] and [`detector`]: the estimator models and friction-event detectors behind two
 //!   small traits;
+//! * [`zeroing`]: the accelerometers' offsets from the rest before the input;
 //! * [`pipeline`]: **the** per-sample step (flags → detector → events → model), run by the
 //!   firmware, by `host-sim qemu`'s check and by `host-sim run`;
 //! * [`stream`]: the defmt messages a frame, the counters and the plan are streamed as (feature
@@ -35,13 +36,14 @@ pub mod model;
 pub mod pipeline;
 pub mod plan;
 pub mod stream;
+pub mod zeroing;
 
 pub use channel::{Channel, CHANNELS};
 pub use detector::{AccelerationDetector, DetectorInput, DisplacementDetector, EventDetector};
 pub use event::{Event, EventKind};
 pub use frame::{Frame, Sample};
 pub use model::{
-    FixedBaseModel, FromPlan, Model, ModelKind, Pushed, RectangularModel, StickSlipModel,
+    FixedBaseModel, FromPlan, Mode, Model, ModelKind, Pushed, RectangularModel, StickSlipModel,
 };
 pub use pipeline::{EventSource, Pipeline, Stats, Step, BATCH};
 pub use plan::{DetectorPlan, Plan, PlanError, Specimen};

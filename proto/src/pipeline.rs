@@ -10,7 +10,8 @@
 //!
 //! 1. flags: `NOT_FINITE` if a channel is NaN/inf; `MISSING` with `ADC_ERROR`; the displacement
 //!    is unusable (`DISP_INVALID`) if the sample is missing, the displacement is not finite,
-//!    flagged saturated upstream, or at or beyond the displacement full scale;
+//!    flagged saturated upstream, or at or beyond the displacement full scale; the
+//!    accelerometers' offsets are removed ([`Zeroing`] on a rest before the input);
 //! 2. the detector processes its input ([`crate::DetectorInput::of`]; NaN when unusable);
 //!    its event, or with [`EventSource::Log`] the sample's logged reversal, is the sample's;
 //! 3. the event goes to the model ([`Model::push`]) before the sample's prediction: flags
@@ -23,6 +24,7 @@ use crate::event::{Event, EventKind};
 use crate::flags;
 use crate::frame::{Frame, Sample};
 use crate::model::{Model, Pushed};
+use crate::zeroing::Zeroing;
 use ssvr_core::stick_slip::MuEstimate;
 
 /// Samples per batch: 16 (1.6 ms at 10 kHz) brings the stick-slip estimator's steady-state
@@ -73,6 +75,7 @@ pub struct Pipeline<M, D> {
     source: EventSource,
     disp_range_m: f32,
     index: u32,
+    zeroing: Zeroing,
     /// Counters.
     pub stats: Stats,
 }
@@ -86,8 +89,24 @@ impl<M: Model, D: EventDetector> Pipeline<M, D> {
             source,
             disp_range_m,
             index: 0,
+            zeroing: Zeroing::new(0),
             stats: Stats::default(),
         }
+    }
+
+    /// Zero the accelerometers on a rest of `rest_samples` samples before the input
+    /// ([`Zeroing`]).
+    pub fn with_rest(mut self, rest_samples: u32) -> Self {
+        self.zeroing = Zeroing::new(rest_samples);
+        self
+    }
+
+    /// The accelerometers' offsets removed (m/s²): table, base, top; the base's includes the
+    /// offset its detector tracks against the table.
+    pub fn offsets(&self) -> [f32; 3] {
+        let mut o = self.zeroing.offsets();
+        o[1] += self.detector.offset();
+        o
     }
 
     /// Process a batch of samples (at most [`BATCH`], and at most `frames.len()`; the rest of
@@ -95,11 +114,12 @@ impl<M: Model, D: EventDetector> Pipeline<M, D> {
     pub fn step_batch(&mut self, samples: &[Sample], frames: &mut [Frame]) -> usize {
         let (mut n, mut events) = (0, 0u32);
         for (s, fr) in samples.iter().zip(frames.iter_mut()).take(BATCH) {
-            *fr = self.detect(s);
+            let channels;
+            (*fr, channels) = self.detect(s);
             if fr.event.is_some() {
                 events |= 1 << n;
             }
-            self.model.note_inputs(n, fr);
+            self.model.note_inputs(n, &channels, fr.flags);
             n += 1;
         }
         let mut i = 0;
@@ -131,9 +151,10 @@ impl<M: Model, D: EventDetector> Pipeline<M, D> {
         f[0]
     }
 
-    /// A sample's flags, its event (counted) and its frame (index assigned, no prediction yet).
+    /// A sample's flags, its event (counted), its frame (index assigned, no prediction yet) and
+    /// its channels with the accelerometers' offsets removed.
     #[inline(always)]
-    fn detect(&mut self, s: &Sample) -> Frame {
+    fn detect(&mut self, s: &Sample) -> (Frame, [f32; crate::CHANNELS]) {
         let mut f = s.flags & flags::ACQUISITION;
         if f & flags::ADC_ERROR != 0 {
             f |= flags::MISSING;
@@ -148,7 +169,9 @@ impl<M: Model, D: EventDetector> Pipeline<M, D> {
         if f & flags::INVALID != 0 {
             self.stats.invalid = self.stats.invalid.wrapping_add(1);
         }
-        let detected = self.detector.process(D::INPUT.of(&s.channels, f));
+        let mut channels = s.channels;
+        self.zeroing.apply(self.index, &mut channels, f);
+        let detected = self.detector.process(D::INPUT.of(&channels, f));
         let event = match self.source {
             EventSource::Detector => detected.as_ref().map(Event::from_detector),
             EventSource::Log => s.reversal.map(|r| Event {
@@ -172,7 +195,7 @@ impl<M: Model, D: EventDetector> Pipeline<M, D> {
         };
         self.index = self.index.wrapping_add(1);
         self.stats.samples = self.stats.samples.wrapping_add(1);
-        frame
+        (frame, channels)
     }
 
     /// Push an event to the model (before its sample's prediction): the flags it adds.
@@ -218,6 +241,8 @@ pub trait Step {
     fn revised(&self, sample: u64) -> Option<f32>;
     /// The detector's longest back-dating (samples).
     fn max_age_samples(&self) -> usize;
+    /// [`Pipeline::offsets`].
+    fn offsets(&self) -> [f32; 3];
 }
 
 impl<M: Model, D: EventDetector> Step for Pipeline<M, D> {
@@ -238,5 +263,8 @@ impl<M: Model, D: EventDetector> Step for Pipeline<M, D> {
     }
     fn max_age_samples(&self) -> usize {
         self.detector.max_age_samples()
+    }
+    fn offsets(&self) -> [f32; 3] {
+        Pipeline::offsets(self)
     }
 }

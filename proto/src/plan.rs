@@ -6,7 +6,7 @@
 //! by a digest ([`Plan::digest`]) the firmware reports so the host can check the image runs
 //! the plan it expects.
 
-use crate::model::ModelKind;
+use crate::model::{Mode, ModelKind};
 use ssvr_core::detect::acceleration::PhaseDetectorConfig;
 use ssvr_core::detect::displacement::DetectorConfig;
 use ssvr_core::recursion::Estimator32;
@@ -106,12 +106,17 @@ pub struct Plan {
     pub stick_slip: StickSlipConfig,
     /// The stick-slip estimator's coefficients in f32 (`StickSlipCoefficients::to_bits`).
     pub coefficients: [u32; COEFFICIENT_WORDS],
+    /// What the model may read ([`Plan::with_mode`]).
+    pub mode: Mode,
+    /// Samples of rest before the input (the planned input's start): the accelerometers are
+    /// zeroed on them ([`crate::zeroing`]).
+    pub rest_samples: u32,
 }
 
 /// Version of the word layout ([`Plan::to_words`]).
-pub const WORDS_VERSION: u32 = 1;
+pub const WORDS_VERSION: u32 = 2;
 /// Length of a plan's words.
-pub const WORDS: usize = 42 + COEFFICIENT_WORDS;
+pub const WORDS: usize = 44 + COEFFICIENT_WORDS;
 
 impl Plan {
     /// The plan of `specimen` and `model`: every setting validated by the library.
@@ -151,7 +156,37 @@ impl Plan {
             storage: storage_for(history, stick_slip.identify_every),
             stick_slip,
             coefficients: coefficients.to_bits(),
+            mode: Mode::Fuse,
+            rest_samples: 0,
         })
+    }
+
+    /// This plan in `mode`: [`Mode::Predict`] never reads the top accelerometer, so the
+    /// stick-slip estimator neither identifies μ (it keeps the prior's) nor corrects its stuck
+    /// state (no observer).
+    pub fn with_mode(mut self, mode: Mode) -> Self {
+        self.mode = mode;
+        if mode == Mode::Predict {
+            self.stick_slip.identify_mu = false;
+            self.stick_slip.use_identified_mu = false;
+            self.stick_slip.observer_bandwidth = 0.0;
+        }
+        self
+    }
+
+    /// This plan with a rest of `seconds` before the input (whole samples of it).
+    pub fn with_rest(mut self, seconds: f64) -> Self {
+        let n = libm::floor(seconds * self.specimen.sample_rate_hz);
+        self.rest_samples = if n.is_finite() && n > 0.0 {
+            if n < u32::MAX as f64 {
+                n as u32
+            } else {
+                u32::MAX
+            }
+        } else {
+            0
+        };
+        self
     }
 
     /// The displacement full scale in f32.
@@ -211,6 +246,8 @@ impl Plan {
             w.u32(self.coefficients[i]);
             i += 1;
         }
+        w.u32(self.mode as u32);
+        w.u32(self.rest_samples);
         w.0
     }
 
@@ -286,6 +323,16 @@ impl Plan {
             coefficients[i] = r.u32();
             i += 1;
         }
+        let code = r.u32();
+        let mode = if code > u8::MAX as u32 {
+            None
+        } else {
+            Mode::from_code(code as u8)
+        };
+        let Some(mode) = mode else {
+            return Err(PlanError::Words);
+        };
+        let rest_samples = r.u32();
         if r.i != WORDS {
             return Err(PlanError::Words);
         }
@@ -299,6 +346,8 @@ impl Plan {
             storage,
             stick_slip,
             coefficients,
+            mode,
+            rest_samples,
         })
     }
 
@@ -403,6 +452,11 @@ mod tests {
                 };
                 let w = p.to_words();
                 assert_eq!(Plan::from_words(&w), Ok(p), "{m:?} at {rate} Hz");
+                let q = p.with_mode(Mode::Predict).with_rest(0.5);
+                assert_eq!(Plan::from_words(&q.to_words()), Ok(q), "{m:?} at {rate} Hz");
+                assert_eq!(q.rest_samples as f64, (0.5 * rate).floor());
+                assert!(!q.stick_slip.identify_mu && q.stick_slip.observer_bandwidth == 0.0);
+                assert_ne!(q.digest(), p.digest());
                 assert_eq!(p.history, p.max_age + 2);
                 assert!(p.storage > p.history);
                 assert!(p.ring.is_power_of_two());

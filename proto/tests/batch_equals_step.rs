@@ -73,7 +73,17 @@ fn compare<M: Model + FromPlan + Clone, D: EventDetector + Clone>(
     model: ModelKind,
     source: EventSource,
 ) {
-    let plan = Plan::new(specimen(), model).unwrap();
+    compare_with::<M, D>(model, source, 0.0, [0.0; 3]);
+}
+
+/// [`compare`] with a rest of `rest_s` before the input and accelerometer offsets.
+fn compare_with<M: Model + FromPlan + Clone, D: EventDetector + Clone>(
+    model: ModelKind,
+    source: EventSource,
+    rest_s: f64,
+    bias: [f32; 3],
+) {
+    let plan = Plan::new(specimen(), model).unwrap().with_rest(rest_s);
     let build = || {
         Pipeline::new(
             M::from_plan(&plan).unwrap(),
@@ -81,10 +91,19 @@ fn compare<M: Model + FromPlan + Clone, D: EventDetector + Clone>(
             source,
             plan.disp_range_m(),
         )
+        .with_rest(plan.rest_samples)
     };
     let (mut one, mut batched) = (build(), build());
     let n = 20_000;
-    let samples: Vec<Sample> = (0..n).map(sample).collect();
+    let samples: Vec<Sample> = (0..n)
+        .map(|k| {
+            let mut s = sample(k);
+            for (c, b) in s.channels.iter_mut().zip(bias) {
+                *c += b;
+            }
+            s
+        })
+        .collect();
     let single: Vec<Frame> = samples.iter().map(|s| one.step(s)).collect();
     let mut frames = Vec::new();
     // Batches of varying length (1 ..= BATCH), as the QEMU replay's last partial batch.
@@ -118,6 +137,7 @@ fn compare<M: Model + FromPlan + Clone, D: EventDetector + Clone>(
         events += usize::from(a.event.is_some());
     }
     assert_eq!(one.stats, batched.stats, "{model:?} counters");
+    assert_eq!(one.offsets(), batched.offsets(), "{model:?} offsets");
     assert!(events > 10, "{model:?}: only {events} events");
     assert!(one.stats.invalid > 0, "{model:?}: no invalid sample");
     if model != ModelKind::FixedBase {
@@ -153,6 +173,23 @@ fn fixed_base_batches_equal_single_steps() {
 fn logged_reversals_batches_equal_single_steps() {
     compare::<RectangularModel, DisplacementDetector<64>>(ModelKind::Rectangular, EventSource::Log);
     compare::<StickSlipModel<H>, AccelerationDetector<64>>(ModelKind::StickSlip, EventSource::Log);
+}
+
+#[test]
+fn zeroed_offsets_batches_equal_single_steps() {
+    let bias = [0.49, -0.3, 0.2];
+    compare_with::<StickSlipModel<H>, AccelerationDetector<64>>(
+        ModelKind::StickSlip,
+        EventSource::Detector,
+        0.05,
+        bias,
+    );
+    compare_with::<RectangularModel, DisplacementDetector<64>>(
+        ModelKind::Rectangular,
+        EventSource::Detector,
+        0.05,
+        bias,
+    );
 }
 
 #[test]

@@ -203,8 +203,9 @@ impl<'a> Runner<'a> {
             })?;
             self.next_true += 1;
         }
-        let (pred, _) = pipeline::model_step(self.ideal.as_mut(), None, sample)
-            .map_err(|err| anyhow!("{label}: ideal estimator at t = {t} s: {err}"))?;
+        let (pred, _) =
+            pipeline::model_step(self.ideal.as_mut(), None, sample, self.pipe.offsets())
+                .map_err(|err| anyhow!("{label}: ideal estimator at t = {t} s: {err}"))?;
         Ok(pred)
     }
 

@@ -15,6 +15,7 @@ mod stick_slip;
 pub use rectangular::RectangularModel;
 pub use stick_slip::{FixedBaseModel, StickSlipF32, StickSlipModel};
 
+use crate::channel::CHANNELS;
 use crate::event::Event;
 use crate::frame::Frame;
 use crate::plan::{Plan, PlanError};
@@ -104,6 +105,45 @@ impl core::str::FromStr for ModelKind {
     }
 }
 
+/// What the model may read (the `--mode` of `host-sim run`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[repr(u8)]
+pub enum Mode {
+    /// Every channel: the best estimate (the stick-slip model identifies μ and corrects its
+    /// stuck state from the measured top acceleration).
+    #[default]
+    Fuse = 0,
+    /// Never the top accelerometer: the model's own prediction, to show beside the measured top
+    /// acceleration when validating a specimen (no identification, no correction).
+    Predict = 1,
+}
+
+impl Mode {
+    /// Its name (`fuse`, `predict`).
+    pub const fn name(self) -> &'static str {
+        match self {
+            Mode::Fuse => "fuse",
+            Mode::Predict => "predict",
+        }
+    }
+
+    /// The mode of a name.
+    pub fn from_name(name: &str) -> Option<Self> {
+        [Mode::Fuse, Mode::Predict]
+            .into_iter()
+            .find(|m| m.name() == name)
+    }
+
+    /// The mode of its code.
+    pub const fn from_code(code: u8) -> Option<Self> {
+        match code {
+            0 => Some(Mode::Fuse),
+            1 => Some(Mode::Predict),
+            _ => None,
+        }
+    }
+}
+
 /// What a model did with an event.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Pushed {
@@ -124,8 +164,9 @@ pub trait Model {
     fn kind(&self) -> ModelKind;
     /// Give a friction event to the estimator (before its sample's prediction).
     fn push(&mut self, e: &Event) -> Result<Pushed, Error>;
-    /// Keep the estimator's inputs of sample `i` of a batch (its frame: channels and flags).
-    fn note_inputs(&mut self, i: usize, frame: &Frame);
+    /// Keep the estimator's inputs of sample `i` of a batch: its channels (offsets removed) and
+    /// flags.
+    fn note_inputs(&mut self, i: usize, channels: &[f32; CHANNELS], flags: u8);
     /// Predict `frames`, samples `from ..` of the batch: a run with no event after its first
     /// sample. Bit for bit the same as one sample at a time.
     fn predict_run(&mut self, frames: &mut [Frame], from: usize);

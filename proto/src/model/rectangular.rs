@@ -4,6 +4,7 @@
 //! `zero_at_stick` (then level 0).
 
 use super::{FromPlan, Model, ModelKind, Pushed};
+use crate::channel::CHANNELS;
 use crate::event::Event;
 use crate::frame::Frame;
 use crate::plan::{Plan, PlanError};
@@ -71,7 +72,7 @@ impl Model for RectangularModel {
     }
 
     #[inline(always)]
-    fn note_inputs(&mut self, _i: usize, _frame: &Frame) {}
+    fn note_inputs(&mut self, _i: usize, _channels: &[f32; CHANNELS], _flags: u8) {}
 
     #[inline(always)]
     fn predict_run(&mut self, frames: &mut [Frame], _from: usize) {

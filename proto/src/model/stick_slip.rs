@@ -7,7 +7,7 @@
 //! `update_block` (bit for bit `update` on each sample).
 
 use super::{FromPlan, Model, ModelKind, Pushed};
-use crate::channel::Channel;
+use crate::channel::{Channel, CHANNELS};
 use crate::event::Event;
 use crate::flags;
 use crate::frame::Frame;
@@ -34,13 +34,13 @@ pub struct StickSlipModel<const H: usize, const EVENTS: bool = true> {
 /// The estimator's inputs of a sample: the table acceleration, and the top acceleration (NaN
 /// when the sample is saturated or missing).
 #[inline(always)]
-fn inputs(f: &Frame) -> (f32, f32) {
-    let top = if f.flags & (flags::SATURATED | flags::MISSING) == 0 {
-        f.channels[Channel::TopAccel.index()]
+fn inputs(channels: &[f32; CHANNELS], f: u8) -> (f32, f32) {
+    let top = if f & (flags::SATURATED | flags::MISSING) == 0 {
+        channels[Channel::TopAccel.index()]
     } else {
         f32::NAN
     };
-    (f.channels[Channel::TableAccel.index()], top)
+    (channels[Channel::TableAccel.index()], top)
 }
 
 /// The fixed-base model: the stick-slip estimator held stuck, no event pushed.
@@ -109,9 +109,9 @@ impl<const H: usize, const EVENTS: bool> Model for StickSlipModel<H, EVENTS> {
     }
 
     #[inline(always)]
-    fn note_inputs(&mut self, i: usize, frame: &Frame) {
+    fn note_inputs(&mut self, i: usize, channels: &[f32; CHANNELS], flags: u8) {
         if let (Some(u), Some(y)) = (self.table.get_mut(i), self.top.get_mut(i)) {
-            (*u, *y) = inputs(frame);
+            (*u, *y) = inputs(channels, flags);
         }
     }
 
@@ -131,8 +131,7 @@ impl<const H: usize, const EVENTS: bool> Model for StickSlipModel<H, EVENTS> {
             }
         } else {
             // (Not reached: the slices are equally long.)
-            for f in frames.iter_mut() {
-                let (u, y) = inputs(f);
+            for ((f, &u), &y) in frames.iter_mut().zip(table).zip(top) {
                 f.prediction = self.est.update(u, y);
             }
         }
