@@ -43,14 +43,12 @@ impl Zeroing {
         if self.rest == 0 {
             return;
         }
-        if index < self.rest {
-            if f & (flags::MISSING | flags::NOT_FINITE | flags::SATURATED) == 0 {
-                self.n += 1;
-                let n = self.n as f32;
-                for (j, c) in ACCELS.iter().enumerate() {
-                    self.sum[j] += channels[c.index()];
-                    self.offset[j] = self.sum[j] / n;
-                }
+        if index < self.rest && f & (flags::MISSING | flags::NOT_FINITE | flags::SATURATED) == 0 {
+            self.n += 1;
+            let n = self.n as f32;
+            for (j, c) in ACCELS.iter().enumerate() {
+                self.sum[j] += channels[c.index()];
+                self.offset[j] = self.sum[j] / n;
             }
         }
         for (j, c) in ACCELS.iter().enumerate() {
