@@ -8,7 +8,8 @@
 //!   `../host-sim/scenes/table1.toml` for the QEMU image, `scenes/board.toml` for the board) with
 //!   the host's own parser (`ssvr_scene::Specimen`: a scene the host rejects fails the build with
 //!   the same message) and makes the plan of its specimen and the model `SSVR_MODEL` =
-//!   `fixed-base` | `rectangular` (default) | `stick-slip` with the host's own code
+//!   `fixed-base` | `rectangular` (default) | `stick-slip`, in the mode `SSVR_MODE` = `fuse`
+//!   (default) | `predict`, with the host's own code
 //!   (`ssvr_proto::Plan::new`). Writes `OUT_DIR/plan.rs`: the plan's words and digest, the
 //!   detector's ring, the stick-slip storage, and the model's and detector's types (only that
 //!   model's code is compiled in).
@@ -18,7 +19,7 @@
 //! Rebuilds track the scene and the model: `rerun-if-env-changed=SSVR_SCENE`, `SSVR_MODEL` and
 //! `rerun-if-changed=<scene>`.
 
-use ssvr_proto::{DetectorPlan, ModelKind, Plan};
+use ssvr_proto::{DetectorPlan, Mode, ModelKind, Plan};
 use ssvr_scene::Specimen;
 use std::env;
 use std::fmt::Write as _;
@@ -65,6 +66,16 @@ fn main() {
         Err(e) => panic!("SSVR_MODEL: {e}"),
     };
 
+    println!("cargo:rerun-if-env-changed=SSVR_MODE");
+    let mode = match env::var("SSVR_MODE") {
+        Err(env::VarError::NotPresent) => Mode::Fuse,
+        Ok(m) if m.is_empty() => Mode::Fuse,
+        Ok(m) => Mode::from_name(&m).unwrap_or_else(|| {
+            panic!("SSVR_MODE = {m:?}: expected fuse or predict (default fuse)")
+        }),
+        Err(e) => panic!("SSVR_MODE: {e}"),
+    };
+
     println!("cargo:rerun-if-env-changed=SSVR_SCENE");
     let path = match env::var_os("SSVR_SCENE") {
         Some(p) => {
@@ -86,7 +97,8 @@ fn main() {
     // The host's parser: the same checks and the same messages (file, line, key).
     let specimen = Specimen::load(&path).unwrap_or_else(|e| panic!("SSVR_SCENE: {e}"));
     let plan = Plan::new(specimen.prior(), model)
-        .unwrap_or_else(|e| panic!("scene {}: {e} (model {})", path.display(), model.name()));
+        .unwrap_or_else(|e| panic!("scene {}: {e} (model {})", path.display(), model.name()))
+        .with_mode(mode);
     fs::write(out.join("plan.rs"), plan_consts(&path, &plan)).expect("write OUT_DIR/plan.rs");
     if board {
         fs::write(out.join("scene_board.rs"), board_consts(&path, &specimen))

@@ -9,6 +9,12 @@ use crate::truth::{EventKind, Truth};
 /// An estimator model (`fixed-base`, `rectangular`, `stick-slip`).
 pub use ssvr_proto::ModelKind as Model;
 
+/// A mode's name on the command line (`--mode`: `fuse` or `predict`).
+pub fn parse_mode(name: &str) -> Result<ssvr_proto::Mode, String> {
+    ssvr_proto::Mode::from_name(name)
+        .ok_or_else(|| format!("`{name}`: expected one of fuse, predict"))
+}
+
 /// A model's name on the command line (`--model`).
 pub fn parse(name: &str) -> Result<Model, String> {
     Model::from_name(name)

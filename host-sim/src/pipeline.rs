@@ -10,8 +10,8 @@ use anyhow::{anyhow, bail, Result};
 use ssvr_proto::plan::MAX_HISTORY;
 use ssvr_proto::{
     flags, AccelerationDetector, DetectorPlan, DisplacementDetector, EventDetector, EventSource,
-    FixedBaseModel, FromPlan, ModelKind, Pipeline, Plan, RectangularModel, Sample, Specimen, Step,
-    StickSlipModel,
+    FixedBaseModel, FromPlan, Mode, ModelKind, Pipeline, Plan, RectangularModel, Sample, Specimen,
+    Step, StickSlipModel,
 };
 
 /// What the controller is told of a scene's specimen and sensors (`ssvr_scene::Specimen::prior`,
@@ -20,10 +20,16 @@ pub fn specimen_of(scene: &Scene) -> Specimen {
     crate::scene::Specimen::from(scene).prior()
 }
 
-/// The plan of a scene and a model (what the firmware built for them runs).
+/// The plan of a scene and a model in the fuse mode (what the firmware built for them runs).
 pub fn plan_for(scene: &Scene, model: ModelKind) -> Result<Plan> {
-    Plan::new(specimen_of(scene), model)
-        .map_err(|e| anyhow!("no {} pipeline for the scene: {e}", model.name()))
+    plan_for_mode(scene, model, Mode::Fuse)
+}
+
+/// The plan of a scene, a model and a mode.
+pub fn plan_for_mode(scene: &Scene, model: ModelKind, mode: Mode) -> Result<Plan> {
+    Ok(Plan::new(specimen_of(scene), model)
+        .map_err(|e| anyhow!("no {} pipeline for the scene: {e}", model.name()))?
+        .with_mode(mode))
 }
 
 /// Options of a host pipeline beyond the plan.

@@ -14,6 +14,10 @@ pub struct QemuArgs {
     /// stick-slip).
     #[arg(long, value_parser = crate::model::parse)]
     pub model: Option<crate::model::Model>,
+    /// What the model may read: `fuse` (every channel, default) or `predict` (never the top
+    /// accelerometer); the firmware is built for it (`SSVR_MODE`).
+    #[arg(long, value_parser = crate::model::parse_mode, default_value = "fuse")]
+    pub mode: ssvr_proto::Mode,
     /// Print one JSON object.
     #[arg(long)]
     pub json: bool,
@@ -21,5 +25,5 @@ pub struct QemuArgs {
 
 /// `host-sim qemu`.
 pub fn command(args: QemuArgs) -> Result<()> {
-    crate::qemu::command(args.scene.as_deref(), args.json, args.model)
+    crate::qemu::command(args.scene.as_deref(), args.json, args.model, args.mode)
 }

@@ -40,6 +40,10 @@ pub struct RunArgs {
     /// simulated run: fixed-base, rectangular or stick-slip).
     #[arg(long, value_parser = crate::model::parse)]
     pub model: Option<crate::model::Model>,
+    /// What the model may read: `fuse` (every channel: the best estimate) or `predict` (never the
+    /// top accelerometer: the model's own prediction, to show beside the measured one).
+    #[arg(long, value_parser = crate::model::parse_mode, default_value = "fuse")]
+    pub mode: ssvr_proto::Mode,
     /// Half-width of the window matching detected to true events (ms).
     #[arg(long, value_name = "MS", default_value_t = 1e3 * run::DEFAULT_MATCH_TOLERANCE_S)]
     pub match_tolerance_ms: f64,
@@ -57,6 +61,7 @@ impl Default for RunArgs {
             plot_from: 0.0,
             on_stick: StickPolicy::Keep,
             model: None,
+            mode: ssvr_proto::Mode::Fuse,
             match_tolerance_ms: 1e3 * run::DEFAULT_MATCH_TOLERANCE_S,
         }
     }
@@ -98,6 +103,7 @@ pub fn command(args: RunArgs) -> Result<()> {
     opts.match_tolerance_s = args.match_tolerance_ms / 1e3;
     opts.on_stick = args.on_stick;
     opts.model = args.model;
+    opts.mode = args.mode;
     if args.plot.is_some() {
         opts.plot_window = Some((args.plot_from, args.plot_from + args.plot_window));
     }

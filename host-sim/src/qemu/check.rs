@@ -39,7 +39,7 @@ use crate::pipeline;
 use crate::scene::Scene;
 use anyhow::{anyhow, bail, Context, Result};
 use serde::Serialize;
-use ssvr_proto::{flags, EventKind, Frame};
+use ssvr_proto::{flags, EventKind, Frame, Mode};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -126,6 +126,9 @@ pub struct QemuReport {
     pub scene_file: Option<PathBuf>,
     /// The estimator model built into the firmware (`fixed-base`, `rectangular`, `stick-slip`).
     pub model: &'static str,
+    /// What the model may read: `fuse` (every channel) or `predict` (never the top
+    /// accelerometer).
+    pub mode: &'static str,
     /// Why this model (chosen from the simulated truth like `host-sim run`, or `--model`).
     pub model_reason: String,
     /// Samples compared (every sample of the scene).
@@ -279,6 +282,16 @@ pub fn run_scene_model(
     firmware_dir: &Path,
     model: Option<Model>,
 ) -> Result<QemuReport> {
+    run_scene_mode(scene, firmware_dir, model, Mode::Fuse)
+}
+
+/// [`run_scene_model`] in `mode` (the firmware built with `SSVR_MODE`).
+pub fn run_scene_mode(
+    scene: &Scene,
+    firmware_dir: &Path,
+    model: Option<Model>,
+    mode: Mode,
+) -> Result<QemuReport> {
     image::require_qemu()?;
     let mut timing = Timings::default();
     let gmu = scene.gmu();
@@ -294,13 +307,13 @@ pub fn run_scene_model(
         Some(m) => (m, "chosen with --model".to_string()),
         None => chosen,
     };
-    let plan = pipeline::plan_for(scene, model)?;
+    let plan = pipeline::plan_for_mode(scene, model, mode)?;
     timing.simulate_s = t0.elapsed().as_secs_f64();
 
     let dir = TempDir::new()?;
     let log = dir.0.join("scene.ssvrlog");
     slog::write(&log, &slog::header_for(scene, 0, samples.len())?, &samples)?;
-    let images = image::build_for_scene_model(firmware_dir, scene, model, &dir.0, true)?;
+    let images = image::build_for_scene_mode(firmware_dir, scene, model, mode, &dir.0, true)?;
     timing.build_s = images.build_s;
     let elf = &images.qemu_elf;
 
@@ -427,6 +440,7 @@ pub fn run_scene_model(
         scene: scene.name.clone(),
         scene_file: scene.source.clone(),
         model: model.name(),
+        mode: mode.name(),
         model_reason,
         samples: samples.len() as u64,
         rate_hz: rate,

@@ -15,6 +15,7 @@
 use crate::model::Model;
 use crate::scene::Scene;
 use anyhow::{anyhow, bail, Context, Result};
+use ssvr_proto::Mode;
 use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -52,6 +53,7 @@ fn leaks_into_nested_cargo(key: &str) -> bool {
         "DEFMT_LOG",
         "SSVR_QEMU_LOG",
         "SSVR_MODEL",
+        "SSVR_MODE",
     ];
     const PREFIX: &[&str] = &[
         "CARGO_PKG_",
@@ -69,20 +71,22 @@ fn leaks_into_nested_cargo(key: &str) -> bool {
 /// `firmware_dir` (see [`cargo_build`]). Returns the ELF (in `firmware/target`: a later build
 /// for another scene overwrites it; [`build_for_scene`] copies it out).
 pub fn build_qemu_image(firmware_dir: &Path) -> Result<PathBuf> {
-    cargo_build(firmware_dir, QEMU_BIN, None, None, None)
+    cargo_build(firmware_dir, QEMU_BIN, None, None, None, None)
 }
 
 /// `cargo build --release --bin <bin> [--no-default-features --features <features>]` in
 /// `firmware_dir` (which has its own `.cargo/config.toml` selecting `thumbv7em-none-eabihf`),
 /// with a clean environment (no inherited `CARGO_TARGET_DIR`, `RUSTFLAGS`, ... from a parent
-/// cargo), `SSVR_SCENE` set to `scene` (absolute) or removed and `SSVR_MODEL` set to `model`
-/// or removed (the firmware's default, rectangular). Returns the ELF.
+/// cargo), `SSVR_SCENE` set to `scene` (absolute) or removed, `SSVR_MODEL` set to `model`
+/// or removed (the firmware's default, rectangular) and `SSVR_MODE` set to `mode` or removed
+/// (fuse). Returns the ELF.
 pub fn cargo_build(
     firmware_dir: &Path,
     bin: &str,
     features: Option<&str>,
     scene: Option<&Path>,
     model: Option<Model>,
+    mode: Option<Mode>,
 ) -> Result<PathBuf> {
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
     let mut cmd = Command::new(cargo);
@@ -113,6 +117,10 @@ pub fn cargo_build(
     match model {
         Some(m) => cmd.env("SSVR_MODEL", m.name()),
         None => cmd.env_remove("SSVR_MODEL"),
+    };
+    match mode {
+        Some(m) => cmd.env("SSVR_MODE", m.name()),
+        None => cmd.env_remove("SSVR_MODE"),
     };
     let out = cmd
         .output()
@@ -216,6 +224,18 @@ pub fn build_for_scene_model(
     out_dir: &Path,
     board: bool,
 ) -> Result<SceneImages> {
+    build_for_scene_mode(firmware_dir, scene, model, Mode::Fuse, out_dir, board)
+}
+
+/// [`build_for_scene_model`] in `mode` (`SSVR_MODE`).
+pub fn build_for_scene_mode(
+    firmware_dir: &Path,
+    scene: &Scene,
+    model: Model,
+    mode: Mode,
+    out_dir: &Path,
+    board: bool,
+) -> Result<SceneImages> {
     let start = Instant::now();
     let dir = firmware_dir.join("target").join("host-sim");
     std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
@@ -237,7 +257,14 @@ pub fn build_for_scene_model(
     let scene_file = scene_file
         .canonicalize()
         .with_context(|| format!("no scene file at {}", scene_file.display()))?;
-    let built = cargo_build(firmware_dir, QEMU_BIN, None, Some(&scene_file), Some(model))?;
+    let built = cargo_build(
+        firmware_dir,
+        QEMU_BIN,
+        None,
+        Some(&scene_file),
+        Some(model),
+        Some(mode),
+    )?;
     let qemu_elf = out_dir.join(format!("{QEMU_BIN}.elf"));
     std::fs::copy(&built, &qemu_elf)
         .with_context(|| format!("cannot copy {} to {}", built.display(), qemu_elf.display()))?;
@@ -248,6 +275,7 @@ pub fn build_for_scene_model(
             Some("board"),
             Some(&scene_file),
             Some(model),
+            Some(mode),
         ) {
             Ok(built) => {
                 let elf = out_dir.join(format!("{BOARD_BIN}.elf"));

@@ -17,5 +17,7 @@ pub mod log;
 pub mod reference;
 pub mod report;
 
-pub use check::{measure_instruction_counts, run_scene, run_scene_model, QemuReport};
+pub use check::{
+    measure_instruction_counts, run_scene, run_scene_mode, run_scene_model, QemuReport,
+};
 pub use report::{command, print_report};

@@ -1,11 +1,12 @@
 //! What `host-sim qemu` prints: the report for people ([`print_report`]) or as JSON, and the
 //! command itself ([`command`]), which fails unless every goal is met.
 
-use super::check::{run_scene_model, QemuReport, GOAL_REFERENCE_GMU, HOST_TOLERANCE_GMU};
+use super::check::{run_scene_mode, QemuReport, GOAL_REFERENCE_GMU, HOST_TOLERANCE_GMU};
 use super::image;
 use crate::model::Model;
 use crate::scene::Scene;
 use anyhow::{bail, Context, Result};
+use ssvr_proto::Mode;
 use std::io::Write;
 use std::path::Path;
 
@@ -36,7 +37,11 @@ pub fn print_report(r: &QemuReport, out: &mut impl Write) -> std::io::Result<()>
     let history = r
         .history
         .map_or_else(String::new, |h| format!(", history {h} samples"));
-    writeln!(out, "  model: {} ({}){history}", r.model, r.model_reason)?;
+    writeln!(
+        out,
+        "  model: {} ({}), mode {}{history}",
+        r.model, r.model_reason, r.mode
+    )?;
     writeln!(
         out,
         "  detector: {} slip starts, {} reversals, {} sticks -> {} level changes pushed (truth: {} friction changes); {} frames flagged, {} events clamped",
@@ -157,13 +162,13 @@ pub fn print_report(r: &QemuReport, out: &mut impl Write) -> std::io::Result<()>
 /// `host-sim qemu [SCENE] [--model MODEL] [--json]`: load the scene (None or `default`: the
 /// built-in default), run [`run_scene_model`] with `firmware/` next to host-sim, print the
 /// report, and fail when the firmware differs from the host.
-pub fn command(scene: Option<&Path>, json: bool, model: Option<Model>) -> Result<()> {
+pub fn command(scene: Option<&Path>, json: bool, model: Option<Model>, mode: Mode) -> Result<()> {
     let scene = match scene {
         None => Scene::default_scene(),
         Some(p) if p == Path::new("default") && !p.exists() => Scene::default_scene(),
         Some(p) => Scene::load(p)?,
     };
-    let report = run_scene_model(&scene, &image::default_firmware_dir(), model)?;
+    let report = run_scene_mode(&scene, &image::default_firmware_dir(), model, mode)?;
     let mut out = std::io::stdout().lock();
     if json {
         let s = serde_json::to_string_pretty(&report).context("serialising the report")?;

@@ -52,8 +52,8 @@ pub use csv::{default_out_path, Num, CSV_HEADER, FLUSH_EVERY_ROWS};
 pub use events::{match_events, DetectionStats, EventMark, DEFAULT_MATCH_TOLERANCE_S};
 pub use plot::{PlotData, Series, DEFAULT_PLOT_WINDOW_S, PLOT_BUCKETS};
 pub use report::{
-    check_runnable, scene_label, summary_text, DetectorReport, EstimatorStats, RunReport,
-    TruthStats,
+    check_runnable, scene_label, summary_text, DetectorReport, EstimatorStats, Identified,
+    RunReport, TruthStats,
 };
 
 use crate::model::{self, Model};
@@ -65,7 +65,7 @@ use csv::CsvWriter;
 use events::{count, true_marks};
 use runner::Runner;
 use serde::Serialize;
-use ssvr_proto::Plan;
+use ssvr_proto::{Mode, Plan};
 use std::fmt;
 use std::io::Write;
 use std::path::Path;
@@ -105,6 +105,8 @@ pub struct RunOptions {
     pub plot_window: Option<(f64, f64)>,
     /// The estimator model; `None` chooses it from the simulated run ([`model::choose`]).
     pub model: Option<Model>,
+    /// What the model may read (`fuse`: every channel; `predict`: never the top accelerometer).
+    pub mode: Mode,
 }
 
 impl RunOptions {
@@ -116,6 +118,7 @@ impl RunOptions {
             match_tolerance_s: DEFAULT_MATCH_TOLERANCE_S,
             plot_window: None,
             model: None,
+            mode: Mode::Fuse,
         }
     }
 }
@@ -179,7 +182,8 @@ pub fn run<W: Write>(
         Some(m) => (m, "chosen with --model".to_string()),
         None => model::choose(&truth, scene.duration_s),
     };
-    let plan = pipeline::plan_for(scene, model).map_err(|e| anyhow!("{label}: {e}"))?;
+    let plan =
+        pipeline::plan_for_mode(scene, model, opts.mode).map_err(|e| anyhow!("{label}: {e}"))?;
     let mut runner = Runner::new(
         scene,
         &label,
@@ -254,7 +258,9 @@ fn outcome(
     let mu = runner.pipe.mu_estimate();
     let estimator = EstimatorStats {
         model: model.name(),
+        mode: opts.mode.name(),
         model_reason,
+        identified: Identified::of(plan, mu.map(|m| m.mu), runner.pipe.offsets()),
         mu_estimate: mu.map(|m| m.mu),
         mu_std: mu.map(|m| m.std),
         revision_delay_ms: revised.then(|| 1e3 * rev.delay as f64 / rate),

@@ -53,13 +53,52 @@ impl TruthStats {
     }
 }
 
+/// The specimen's parameters and the accelerometers' offsets as the estimator ends the run
+/// (`estimator.identified` in `run --json`). The natural frequency, the damping ratio and the
+/// static friction coefficient are the prior's (not identified online yet); the friction
+/// coefficient is μ̂ when the model identified it, else the prior's; the offsets are those the
+/// pipeline removed: table and top from the rest before the input (zero without one), the base
+/// from the rest plus the slip acceleration's offset its detector tracks (the base against the
+/// table), stick-slip model only.
+#[derive(Debug, Clone, Serialize)]
+pub struct Identified {
+    /// Natural frequency (Hz).
+    pub natural_frequency_hz: f64,
+    /// Damping ratio.
+    pub damping_ratio: f64,
+    /// Kinetic friction coefficient.
+    pub friction_coefficient: f64,
+    /// Static friction coefficient.
+    pub static_friction_coefficient: f64,
+    /// Offsets of the table, base and top accelerometers (m/s²).
+    pub accel_bias_m_s2: [f64; 3],
+}
+
+impl Identified {
+    /// From the plan (the prior), the identified μ and the pipeline's offsets.
+    pub fn of(plan: &ssvr_proto::Plan, mu: Option<f64>, offsets: [f32; 3]) -> Self {
+        let p = &plan.specimen.structure;
+        Self {
+            natural_frequency_hz: p.natural_frequency_hz,
+            damping_ratio: p.damping_ratio,
+            friction_coefficient: mu.unwrap_or(p.friction_coefficient),
+            static_friction_coefficient: plan.specimen.static_friction_coefficient,
+            accel_bias_m_s2: offsets.map(f64::from),
+        }
+    }
+}
+
 /// The estimator's figures (errors against the truth's ü1 over every sample).
 #[derive(Debug, Clone, Serialize)]
 pub struct EstimatorStats {
     /// The model ("fixed-base", "rectangular", "stick-slip").
     pub model: &'static str,
+    /// What the model read: "fuse" (every channel) or "predict" (never the top accelerometer).
+    pub mode: &'static str,
     /// Why this model (chosen from the simulated run, or "--model").
     pub model_reason: String,
+    /// The specimen's parameters and the sensors' offsets as the estimator ends the run.
+    pub identified: Identified,
     /// The identified friction coefficient (stick-slip model; null otherwise).
     pub mu_estimate: Option<f64>,
     /// Its standard deviation.
