@@ -1,10 +1,14 @@
 //! "Model only what a scene needs": which estimator model a scene calls for. The models, their
 //! settings and the pipeline that drives them are `ssvr_proto`'s (the firmware's own); here
-//! [`choose`] picks the smallest model that serves the scene from the pre-test simulation (the
-//! exact truth): no slip phase → fixed-base; no stick after the first fifth of the run →
-//! rectangular; otherwise stick-slip.
+//! [`choose_for`] picks the smallest model that serves the scene from a pre-test simulation of
+//! what the controller knows: the prior specimen (`[estimator]`, else `[structure]`) on the
+//! planned input, never the specimen's truth ([`choose`]: no slip phase → fixed-base; no stick
+//! after the first fifth of the run → rectangular; otherwise stick-slip).
 
-use crate::truth::{EventKind, Truth};
+use crate::scene::Scene;
+use crate::truth::{simulate, EventKind, Truth, TruthInput};
+use anyhow::{anyhow, Result};
+use ssvr_core::Structure;
 
 /// An estimator model (`fixed-base`, `rectangular`, `stick-slip`).
 pub use ssvr_proto::ModelKind as Model;
@@ -19,6 +23,20 @@ pub fn parse_mode(name: &str) -> Result<ssvr_proto::Mode, String> {
 pub fn parse(name: &str) -> Result<Model, String> {
     Model::from_name(name)
         .ok_or_else(|| format!("`{name}`: expected one of fixed-base, rectangular, stick-slip"))
+}
+
+/// The model a scene calls for, from a simulation of the prior specimen (what the controller is
+/// told) on the planned input (the scene's table motion), with the reason in words.
+pub fn choose_for(scene: &Scene) -> Result<(Model, String)> {
+    let prior = crate::pipeline::specimen_of(scene);
+    let structure = Structure::new(prior.structure)
+        .map_err(|e| anyhow!("the prior specimen is invalid: {e}"))?;
+    let table = scene.table_motion();
+    let input = TruthInput::new(&structure, &table, scene.duration_s)
+        .with_static_friction(prior.static_friction_coefficient);
+    let sim = simulate(&input).map_err(|e| anyhow!("the simulation of the prior failed: {e}"))?;
+    let (model, why) = choose(&sim, scene.duration_s);
+    Ok((model, format!("{why} (simulation of the prior)")))
 }
 
 /// The smallest model that serves the simulated run, with the reason in words.

@@ -53,7 +53,7 @@ pub struct SceneLog {
     pub truth_top: Vec<f64>,
     /// The truth's friction changes.
     pub truth_changes: usize,
-    /// The model [`model::choose`] picks from the truth, and why.
+    /// The model [`model::choose_for`] picks from a simulation of the prior, and why.
     pub model: (Model, String),
 }
 
@@ -76,6 +76,6 @@ pub fn scene_log(scene: &Scene) -> Result<SceneLog> {
         samples: measured.iter().map(|(_, f)| sample_of(f)).collect(),
         truth_top: measured.iter().map(|(t, _)| t.top_accel_m_s2).collect(),
         truth_changes: truth.friction_train().len(),
-        model: model::choose(&truth, scene.duration_s),
+        model: model::choose_for(scene)?,
     })
 }

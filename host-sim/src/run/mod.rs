@@ -103,7 +103,7 @@ pub struct RunOptions {
     pub match_tolerance_s: f64,
     /// Keep the series of this time window `[from_s, to_s]` for a plot.
     pub plot_window: Option<(f64, f64)>,
-    /// The estimator model; `None` chooses it from the simulated run ([`model::choose`]).
+    /// The estimator model; `None` chooses it from a simulation of the prior ([`model::choose_for`]).
     pub model: Option<Model>,
     /// What the model may read (`fuse`: every channel; `predict`: never the top accelerometer).
     pub mode: Mode,
@@ -180,7 +180,7 @@ pub fn run<W: Write>(
 
     let (model, model_reason) = match opts.model {
         Some(m) => (m, "chosen with --model".to_string()),
-        None => model::choose(&truth, scene.duration_s),
+        None => model::choose_for(scene).map_err(|e| anyhow!("{label}: {e}"))?,
     };
     let plan =
         pipeline::plan_for_mode(scene, model, opts.mode).map_err(|e| anyhow!("{label}: {e}"))?;
