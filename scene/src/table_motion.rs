@@ -20,6 +20,13 @@ pub enum TableMotion {
         /// Accelerations (m/s², already scaled).
         accel_m_s2: Vec<f64>,
     },
+    /// The table at rest until `start_s`, then `motion` (its own t = 0 at `start_s`).
+    Delayed {
+        /// When the motion starts (s, ≥ 0).
+        start_s: f64,
+        /// The motion.
+        motion: Box<TableMotion>,
+    },
 }
 
 impl TableMotion {
@@ -51,6 +58,13 @@ impl TableMotion {
                 let (t0, t1) = (times_s[n - 1], times_s[n]);
                 let (a0, a1) = (accel_m_s2[n - 1], accel_m_s2[n]);
                 a0 + (a1 - a0) * (t - t0) / (t1 - t0)
+            }
+            TableMotion::Delayed { start_s, motion } => {
+                if t < *start_s {
+                    0.0
+                } else {
+                    motion.accel(t - start_s)
+                }
             }
         }
     }

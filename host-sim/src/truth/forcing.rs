@@ -10,8 +10,8 @@ use std::f64::consts::PI;
 pub(super) enum Forcing {
     /// ü_g = u0 + u1 τ.
     Affine { u0: f64, u1: f64 },
-    /// ü_g = amp · sin(ω (t0 + τ)).
-    Harmonic { amp: f64, omega: f64 },
+    /// ü_g = amp · sin(ω (t0 + τ) − phase) (phase = ω·start for an input that starts late).
+    Harmonic { amp: f64, omega: f64, phase: f64 },
 }
 
 impl Forcing {
@@ -21,8 +21,8 @@ impl Forcing {
     pub(super) fn accel(&self, t0: f64, tau: f64) -> (f64, f64) {
         match *self {
             Forcing::Affine { u0, u1 } => (u0 + u1 * tau, u1),
-            Forcing::Harmonic { amp, omega } => {
-                let (s, c) = (omega * (t0 + tau)).sin_cos();
+            Forcing::Harmonic { amp, omega, phase } => {
+                let (s, c) = (omega * (t0 + tau) - phase).sin_cos();
                 (amp * s, amp * omega * c)
             }
         }
@@ -35,13 +35,14 @@ impl Forcing {
                 tau * (u0 + 0.5 * u1 * tau),
                 tau * tau * (0.5 * u0 + u1 * tau / 6.0),
             ),
-            Forcing::Harmonic { amp, omega } => {
+            Forcing::Harmonic { amp, omega, phase } => {
                 // cos a − cos b = 2 sin((a+b)/2) sin((b−a)/2), sin b − sin a = 2 cos((a+b)/2) sin((b−a)/2).
                 let half = (0.5 * omega * tau).sin();
-                let mid = omega * (t0 + 0.5 * tau);
+                let mid = omega * (t0 + 0.5 * tau) - phase;
                 let (sm, cm) = mid.sin_cos();
                 let d1 = 2.0 * amp / omega * sm * half;
-                let d2 = amp / omega * ((omega * t0).cos() * tau - 2.0 * cm * half / omega);
+                let d2 =
+                    amp / omega * ((omega * t0 - phase).cos() * tau - 2.0 * cm * half / omega);
                 (d1, d2)
             }
         }
@@ -93,7 +94,38 @@ pub(super) fn segments(table: &TableMotion) -> Result<Vec<Segment>, TruthError> 
                     period_s: period,
                 });
             }
-            whole(Forcing::Harmonic { amp, omega })
+            whole(Forcing::Harmonic {
+                amp,
+                omega,
+                phase: 0.0,
+            })
+        }
+        TableMotion::Delayed { start_s, motion } => {
+            let start = *start_s;
+            if !(start.is_finite() && start >= 0.0) {
+                return Err(TruthError::Start { start_s: start });
+            }
+            // Zero until `start`, then the motion's own segments, `start` later.
+            let mut out = vec![Segment {
+                start: 0.0,
+                end: start,
+                forcing: Forcing::ZERO,
+            }];
+            for seg in segments(motion)? {
+                out.push(Segment {
+                    start: seg.start + start,
+                    end: seg.end + start,
+                    forcing: match seg.forcing {
+                        Forcing::Harmonic { amp, omega, phase } => Forcing::Harmonic {
+                            amp,
+                            omega,
+                            phase: phase + omega * start,
+                        },
+                        affine => affine,
+                    },
+                });
+            }
+            Ok(out.into_iter().filter(|s| s.end > s.start).collect())
         }
         TableMotion::Record {
             times_s,

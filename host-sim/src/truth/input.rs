@@ -55,6 +55,11 @@ pub enum TruthError {
         /// Period (s).
         period_s: f64,
     },
+    /// The start of a delayed table motion is not finite or negative.
+    Start {
+        /// The start (s).
+        start_s: f64,
+    },
     /// The record's time and acceleration arrays have different lengths.
     RecordLengths {
         /// Number of times.
@@ -100,6 +105,9 @@ impl fmt::Display for TruthError {
                 "harmonic table motion (amplitude {amplitude_m_s2} m/s^2, period {period_s} s): \
                  expected a finite amplitude and a finite period > 0"
             ),
+            TruthError::Start { start_s } => {
+                write!(f, "table motion start {start_s} s: expected a finite value >= 0")
+            }
             TruthError::RecordLengths { times, accels } => write!(
                 f,
                 "record has {times} times but {accels} accelerations"

@@ -55,6 +55,10 @@ impl Model {
         // mode only matters for a few 1/(a+ν) after a transition and gets a geometric grid there.
         let omega_in = match table {
             TableMotion::Harmonic { period_s, .. } => 2.0 * PI / period_s,
+            TableMotion::Delayed { motion, .. } => match motion.as_ref() {
+                TableMotion::Harmonic { period_s, .. } => 2.0 * PI / period_s,
+                _ => 0.0,
+            },
             _ => 0.0,
         };
         let omega_stuck = p.max(omega_in);

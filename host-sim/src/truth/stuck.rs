@@ -25,7 +25,7 @@ impl Piece {
                 let (y, v) = hom(s0.delta - c0, s0.delta_dot - c1);
                 (y + c0 + c1 * tau, v + c1)
             }
-            Forcing::Harmonic { amp, omega } => {
+            Forcing::Harmonic { amp, omega, phase } => {
                 let (y, v) = hom(s0.delta, s0.delta_dot);
                 if tau == 0.0 {
                     return (y, v);
@@ -39,7 +39,7 @@ impl Piece {
                 let rot = Cx::cis(omega * tau).scale(tau);
                 let j1 = rot.mul(phi1(mu1.sub(io).scale(tau)));
                 let j2 = rot.mul(phi1(mu2.sub(io).scale(tau)));
-                let q = Cx::cis(omega * self.t0).scale(-amp);
+                let q = Cx::cis(omega * self.t0 - phase).scale(-amp);
                 let inv = Cx::new(0.0, -0.5 / n);
                 let yf = q.mul(j1.sub(j2)).mul(inv).im;
                 let vf = q.mul(mu1.mul(j1).sub(mu2.mul(j2))).mul(inv).im;
