@@ -98,7 +98,8 @@ fn main() {
     let specimen = Specimen::load(&path).unwrap_or_else(|e| panic!("SSVR_SCENE: {e}"));
     let plan = Plan::new(specimen.prior(), model)
         .unwrap_or_else(|e| panic!("scene {}: {e} (model {})", path.display(), model.name()))
-        .with_mode(mode);
+        .with_mode(mode)
+        .with_rest(specimen.start_s);
     fs::write(out.join("plan.rs"), plan_consts(&path, &plan)).expect("write OUT_DIR/plan.rs");
     if board {
         fs::write(out.join("scene_board.rs"), board_consts(&path, &specimen))

@@ -5,7 +5,7 @@
 //! `host-sim run` predicts with it, and `host-sim qemu` checks the firmware's frames against it.
 
 use crate::scene::Scene;
-use crate::sensors::{SensorFrame, FLAG_ACCEL_SATURATED, FLAG_DISP_SATURATED};
+use crate::sensors::{SensorFrame, FLAG_ACCEL_SATURATED, FLAG_DISP_SATURATED, FLAG_MISSING};
 use anyhow::{anyhow, bail, Result};
 use ssvr_proto::plan::MAX_HISTORY;
 use ssvr_proto::{
@@ -25,11 +25,13 @@ pub fn plan_for(scene: &Scene, model: ModelKind) -> Result<Plan> {
     plan_for_mode(scene, model, Mode::Fuse)
 }
 
-/// The plan of a scene, a model and a mode.
+/// The plan of a scene, a model and a mode (with the scene's rest before the input, whose
+/// accelerometer readings the pipeline zeroes).
 pub fn plan_for_mode(scene: &Scene, model: ModelKind, mode: Mode) -> Result<Plan> {
     Ok(Plan::new(specimen_of(scene), model)
         .map_err(|e| anyhow!("no {} pipeline for the scene: {e}", model.name()))?
-        .with_mode(mode))
+        .with_mode(mode)
+        .with_rest(scene.start_s))
 }
 
 /// Options of a host pipeline beyond the plan.
@@ -103,7 +105,8 @@ pub fn build(plan: &Plan, opts: Options) -> Result<Box<dyn Step>> {
 }
 
 /// A measured frame as the pipeline's sample: a saturated accelerometer is `SATURATED`, a
-/// saturated displacement `SATURATED | DISP_INVALID` (as the sensor log records them).
+/// saturated displacement `SATURATED | DISP_INVALID` (as the sensor log records them), a dropped
+/// frame `MISSING`.
 pub fn sample_of(f: &SensorFrame) -> Sample {
     let mut fl = 0;
     if f.flags & FLAG_ACCEL_SATURATED != 0 {
@@ -111,6 +114,9 @@ pub fn sample_of(f: &SensorFrame) -> Sample {
     }
     if f.flags & FLAG_DISP_SATURATED != 0 {
         fl |= flags::SATURATED | flags::DISP_INVALID;
+    }
+    if f.flags & FLAG_MISSING != 0 {
+        fl |= flags::MISSING;
     }
     Sample {
         channels: [

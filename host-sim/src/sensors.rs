@@ -4,10 +4,16 @@
 //! the base and the top (white Gaussian noise, then a `accel_adc_bits` ADC over ±`accel_range_m_s2`,
 //! saturating), and a base-to-table displacement sensor (white noise, ±`disp_range_m`, saturating).
 //! The noise is seeded (`[sensors] seed`), so a scene always produces the same log.
+//!
+//! Imperfections (`[sensors]`): each accelerometer measures (1 + e)·true + bias + noise
+//! (`accel_gain_error`, `accel_bias_m_s2`: table, base, top), the displacement sensor true +
+//! `disp_bias_m` + noise; with `dropout_probability` a sample's whole frame is missing (flagged
+//! [`FLAG_MISSING`], channels NaN), drawn from a second seeded stream so that the other samples'
+//! noise is the same as without dropouts.
 
 use crate::scene::Sensors;
 use crate::truth::{Truth, TruthSample};
-use rand::SeedableRng;
+use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 
@@ -15,6 +21,8 @@ use rand_distr::{Distribution, Normal};
 pub const FLAG_ACCEL_SATURATED: u8 = 1 << 0;
 /// Flag: the displacement channel saturated.
 pub const FLAG_DISP_SATURATED: u8 = 1 << 1;
+/// Flag: the sample's frame is missing (dropped); its channels are NaN.
+pub const FLAG_MISSING: u8 = 1 << 2;
 
 /// One sample of the measured channels (SI units).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -38,6 +46,8 @@ pub struct SensorFrame {
 pub struct SensorModel {
     cfg: Sensors,
     rng: ChaCha8Rng,
+    /// The dropouts' own stream.
+    dropout_rng: ChaCha8Rng,
     accel_noise: Option<Normal<f64>>,
     disp_noise: Option<Normal<f64>>,
     lsb: f64,
@@ -51,6 +61,11 @@ impl SensorModel {
         Self {
             cfg: cfg.clone(),
             rng: ChaCha8Rng::seed_from_u64(cfg.seed),
+            dropout_rng: {
+                let mut r = ChaCha8Rng::seed_from_u64(cfg.seed);
+                r.set_stream(1);
+                r
+            },
             accel_noise: Normal::new(0.0, cfg.accel_noise_rms_m_s2)
                 .ok()
                 .filter(|_| cfg.accel_noise_rms_m_s2 > 0.0),
@@ -62,7 +77,12 @@ impl SensorModel {
         }
     }
 
-    fn accel(&mut self, x: f64, flags: &mut u8) -> f32 {
+    /// Accelerometer `i` (table, base, top) measuring `x`.
+    fn accel(&mut self, i: usize, x: f64, flags: &mut u8) -> f32 {
+        let (e, b) = (self.cfg.accel_gain_error[i], self.cfg.accel_bias_m_s2[i]);
+        // (Applied only when set, so that a perfect sensor gives today's numbers bit for bit.)
+        let x = if e != 0.0 { (1.0 + e) * x } else { x };
+        let x = if b != 0.0 { x + b } else { x };
         let noisy = x + self.accel_noise.map_or(0.0, |n| n.sample(&mut self.rng));
         let code = (noisy / self.lsb).round();
         let clamped = code.clamp(-self.max_code, self.max_code - 1.0);
@@ -75,10 +95,15 @@ impl SensorModel {
     /// Measure one truth sample (sample index `k`).
     pub fn measure(&mut self, k: u64, s: &TruthSample) -> SensorFrame {
         let mut flags = 0;
-        let table = self.accel(s.table_accel_m_s2, &mut flags);
-        let base = self.accel(s.base_accel_m_s2, &mut flags);
-        let top = self.accel(s.top_accel_m_s2, &mut flags);
-        let d = s.slip_m + self.disp_noise.map_or(0.0, |n| n.sample(&mut self.rng));
+        let table = self.accel(0, s.table_accel_m_s2, &mut flags);
+        let base = self.accel(1, s.base_accel_m_s2, &mut flags);
+        let top = self.accel(2, s.top_accel_m_s2, &mut flags);
+        let slip = if self.cfg.disp_bias_m != 0.0 {
+            s.slip_m + self.cfg.disp_bias_m
+        } else {
+            s.slip_m
+        };
+        let d = slip + self.disp_noise.map_or(0.0, |n| n.sample(&mut self.rng));
         let r = self.cfg.disp_range_m;
         let disp = if d.abs() > r {
             flags |= FLAG_DISP_SATURATED;
@@ -86,6 +111,17 @@ impl SensorModel {
         } else {
             d
         };
+        let p = self.cfg.dropout_probability;
+        if p > 0.0 && self.dropout_rng.random::<f64>() < p {
+            return SensorFrame {
+                k,
+                table_accel_m_s2: f32::NAN,
+                base_accel_m_s2: f32::NAN,
+                top_accel_m_s2: f32::NAN,
+                disp_m: f32::NAN,
+                flags: FLAG_MISSING,
+            };
+        }
         SensorFrame {
             k,
             table_accel_m_s2: table,

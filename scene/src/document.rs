@@ -4,12 +4,14 @@
 //! The walk checks the parts in a fixed order, so a document with several errors reports the same
 //! first one whichever entry point reads it: missing keys and tables (`duration_s`,
 //! `[structure]`, `[input]`, `[sampling]`), then `duration_s`, `gravity_m_s2`, `[structure]`,
+//! `[estimator]`,
 //! `[sampling] rate_hz`, the sample count, `[input]`, `[sensors]` and the board settings. A
 //! specimen needs no table motion: `duration_s` and `[input]` may be absent, and are validated
 //! when present.
 
 use crate::board::{BoardSettings, RawAdc};
 use crate::error::SceneError;
+use crate::estimator::{Prior, RawEstimator};
 use crate::input::{Input, RawInput};
 use crate::parse::ParseContext;
 use crate::scene::MAX_SAMPLES;
@@ -39,6 +41,7 @@ pub(crate) struct RawScene {
     duration_s: Option<Spanned<f64>>,
     gravity_m_s2: Option<Spanned<f64>>,
     structure: Option<Spanned<RawStructure>>,
+    estimator: Option<Spanned<RawEstimator>>,
     input: Option<Spanned<RawInput>>,
     sampling: Option<Spanned<RawSampling>>,
     // Not spanned: a `[sensors.<channel>]` or `adc.<key>` alone defines them implicitly, and an
@@ -71,7 +74,9 @@ pub(crate) struct Document {
     pub(crate) rate_hz: f64,
     pub(crate) structure: Structure,
     pub(crate) static_friction_coefficient: f64,
+    pub(crate) prior: Prior,
     pub(crate) input: Option<Input>,
+    pub(crate) start_s: f64,
     pub(crate) sensors: Sensors,
     pub(crate) board: BoardSettings,
 }
@@ -121,6 +126,7 @@ impl ParseContext<'_> {
             None => STANDARD_GRAVITY,
         };
         let (structure, mu_s) = self.structure(structure_table, gravity, &raw.gravity_m_s2)?;
+        let prior = self.estimator(raw.estimator.as_ref(), &structure, mu_s)?;
         let rate_v = &sampling.get_ref().rate_hz;
         let rate = self.check(
             Some("sampling"),
@@ -145,9 +151,9 @@ impl ParseContext<'_> {
             }
             _ => None,
         };
-        let input = match &raw.input {
-            Some(table) => Some(self.input(table)?),
-            None => None,
+        let (input, start_s) = match &raw.input {
+            Some(table) => (Some(self.input(table)?), self.start(table)?),
+            None => (None, 0.0),
         };
         let raw_sensors = raw.sensors.as_ref();
         let sensors = match raw_sensors {
@@ -166,7 +172,9 @@ impl ParseContext<'_> {
             rate_hz: rate,
             structure,
             static_friction_coefficient: mu_s,
+            prior,
             input,
+            start_s,
             sensors,
             board,
         })

@@ -105,9 +105,31 @@ pub(crate) struct RawInput {
     file: Option<Spanned<String>>,
     units: Option<Spanned<Units>>,
     scale: Option<Spanned<f64>>,
+    start_s: Option<Spanned<f64>>,
 }
 
 impl ParseContext<'_> {
+    /// `[input] start_s`: the table at rest until then (s; 0 when absent). Table motion only.
+    pub(crate) fn start(&self, table: &Spanned<RawInput>) -> Result<f64, SceneError> {
+        let r = table.get_ref();
+        let Some(v) = &r.start_s else {
+            return Ok(0.0);
+        };
+        if *r.kind.get_ref() == Kind::Reversals {
+            return Err(self.err(
+                v.span(),
+                "[input] start_s: a reversals input has no table motion to start".into(),
+            ));
+        }
+        self.check(
+            Some("input"),
+            "start_s",
+            v,
+            v.get_ref().is_finite() && *v.get_ref() >= 0.0,
+            "start_s >= 0 s",
+        )
+    }
+
     /// The `[input]` table.
     pub(crate) fn input(&self, table: &Spanned<RawInput>) -> Result<Input, SceneError> {
         const S: Option<&str> = Some("input");

@@ -49,6 +49,7 @@
 mod board;
 mod document;
 mod error;
+mod estimator;
 mod input;
 mod parse;
 mod record;
@@ -63,6 +64,7 @@ pub use board::{
     BoardSettings, ChannelScale, ADC_FULL_SCALE_V, ADC_ODR_CLOCK_HZ, ADC_OSRS, CHANNELS,
 };
 pub use error::SceneError;
+pub use estimator::Prior;
 pub use input::{Input, Reversals};
 pub use record::{parse_record, Record};
 pub use scene::{Scene, MAX_SAMPLES};

@@ -3,6 +3,7 @@
 use crate::board::BoardSettings;
 use crate::document::{read_scene_file, Motion};
 use crate::error::SceneError;
+use crate::estimator::Prior;
 use crate::input::Input;
 use crate::parse::ParseContext;
 use crate::sensors::Sensors;
@@ -31,6 +32,10 @@ pub struct Scene {
     pub structure: Structure,
     /// Static friction coefficient μs ≥ μ.
     pub static_friction_coefficient: f64,
+    /// The estimator's prior (`[estimator]`; the specimen itself without it).
+    pub estimator: Prior,
+    /// The table at rest until then (s, `[input] start_s`; 0: the input starts at once).
+    pub start_s: f64,
     /// The input.
     pub input: Input,
     /// Sensor models.
@@ -63,6 +68,8 @@ impl Scene {
             samples: 100_000,
             structure,
             static_friction_coefficient: 0.2,
+            estimator: Prior::exact(&structure, 0.2),
+            start_s: 0.0,
             input: Input::Harmonic {
                 amplitude_m_s2: 2.0,
                 period_s: 0.143,
@@ -95,6 +102,8 @@ impl Scene {
             samples,
             structure: doc.structure,
             static_friction_coefficient: doc.static_friction_coefficient,
+            estimator: doc.prior,
+            start_s: doc.start_s,
             input,
             sensors: doc.sensors,
             board: doc.board,
@@ -113,6 +122,19 @@ impl Scene {
 
     /// The table acceleration (none for a reversals scene).
     pub fn table_motion(&self) -> TableMotion {
+        let motion = self.input_motion();
+        if self.start_s > 0.0 {
+            TableMotion::Delayed {
+                start_s: self.start_s,
+                motion: Box::new(motion),
+            }
+        } else {
+            motion
+        }
+    }
+
+    /// The input's own table motion, from its t = 0 (without the rest before `start_s`).
+    fn input_motion(&self) -> TableMotion {
         match &self.input {
             Input::Harmonic {
                 amplitude_m_s2,

@@ -22,6 +22,15 @@ pub struct Sensors {
     pub disp_noise_rms_m: f64,
     /// Displacement sensor full scale ± (m).
     pub disp_range_m: f64,
+    /// Constant offsets of the table, base and top accelerometers (m/s²).
+    pub accel_bias_m_s2: [f64; 3],
+    /// Gain errors e of the table, base and top accelerometers: measured = (1 + e)·true + bias
+    /// + noise.
+    pub accel_gain_error: [f64; 3],
+    /// Constant offset of the displacement sensor (m).
+    pub disp_bias_m: f64,
+    /// Probability that a sample's whole frame is missing (flagged), seeded.
+    pub dropout_probability: f64,
 }
 
 impl Default for Sensors {
@@ -33,6 +42,10 @@ impl Default for Sensors {
             accel_adc_bits: 24,
             disp_noise_rms_m: 1e-6,
             disp_range_m: 0.05,
+            accel_bias_m_s2: [0.0; 3],
+            accel_gain_error: [0.0; 3],
+            disp_bias_m: 0.0,
+            dropout_probability: 0.0,
         }
     }
 }
@@ -47,6 +60,10 @@ pub(crate) struct RawSensors {
     accel_adc_bits: Option<Spanned<u32>>,
     disp_noise_rms_m: Option<Spanned<f64>>,
     disp_range_m: Option<Spanned<f64>>,
+    accel_bias_m_s2: Option<Spanned<Vec<f64>>>,
+    accel_gain_error: Option<Spanned<Vec<f64>>>,
+    disp_bias_m: Option<Spanned<f64>>,
+    dropout_probability: Option<Spanned<f64>>,
     // The board's channel scaling (validated in `board`); not spanned, as implicit tables
     // (`displacement.volts_per_unit = 24.0`) have no span.
     table_accel: Option<RawChannel>,
@@ -110,7 +127,50 @@ impl ParseContext<'_> {
             }
             None => d.accel_adc_bits,
         };
+        // Three finite numbers (table, base, top), each passing `ok`.
+        let three = |v: &Option<Spanned<Vec<f64>>>,
+                     key: &str,
+                     ok: fn(f64) -> bool,
+                     expected: &str|
+         -> Result<[f64; 3], SceneError> {
+            let Some(v) = v else {
+                return Ok([0.0; 3]);
+            };
+            match v.get_ref().as_slice() {
+                &[a, b, c] if [a, b, c].iter().all(|&x| x.is_finite() && ok(x)) => Ok([a, b, c]),
+                other => Err(self.err(
+                    v.span(),
+                    format!(
+                        "[sensors] {key} = {other:?} is out of range: expected 3 finite numbers \
+                         (table, base, top), {expected}"
+                    ),
+                )),
+            }
+        };
+        let accel_bias_m_s2 = three(&r.accel_bias_m_s2, "accel_bias_m_s2", |_| true, "in m/s^2")?;
+        let accel_gain_error = three(
+            &r.accel_gain_error,
+            "accel_gain_error",
+            |e| e > -1.0,
+            "each > -1",
+        )?;
         Ok(Sensors {
+            accel_bias_m_s2,
+            accel_gain_error,
+            disp_bias_m: opt(
+                &r.disp_bias_m,
+                "disp_bias_m",
+                d.disp_bias_m,
+                |v| v.is_finite(),
+                "a finite number of m",
+            )?,
+            dropout_probability: opt(
+                &r.dropout_probability,
+                "dropout_probability",
+                d.dropout_probability,
+                |p| (0.0..1.0).contains(&p),
+                "0 <= dropout_probability < 1",
+            )?,
             seed: r.seed.as_ref().map_or(d.seed, |s| *s.get_ref()),
             accel_noise_rms_m_s2: opt(
                 &r.accel_noise_rms_m_s2,

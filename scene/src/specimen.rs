@@ -9,6 +9,7 @@
 use crate::board::BoardSettings;
 use crate::document::{read_scene_file, Motion};
 use crate::error::SceneError;
+use crate::estimator::Prior;
 use crate::parse::ParseContext;
 use crate::scene::Scene;
 use crate::sensors::Sensors;
@@ -35,6 +36,10 @@ pub struct Specimen {
     pub sensors: Sensors,
     /// The board image's ADC configuration and channel scaling, defaults resolved.
     pub board: BoardSettings,
+    /// The estimator's prior (`[estimator]`; the specimen itself without it).
+    pub estimator: Prior,
+    /// The table at rest until then (s, `[input] start_s`; 0 without it).
+    pub start_s: f64,
 }
 
 impl Specimen {
@@ -58,6 +63,8 @@ impl Specimen {
             rate_hz: doc.rate_hz,
             sensors: doc.sensors,
             board: doc.board,
+            estimator: doc.prior,
+            start_s: doc.start_s,
         })
     }
 }
@@ -74,17 +81,20 @@ impl From<&Scene> for Specimen {
             rate_hz: scene.rate_hz,
             sensors: scene.sensors.clone(),
             board: scene.board,
+            estimator: scene.estimator,
+            start_s: scene.start_s,
         }
     }
 }
 
 impl Specimen {
     /// What the controller is told (`ssvr_proto::Specimen`, the input of its plan): the
-    /// structure, static friction, sample rate, sensor noise levels and displacement range.
+    /// estimator's prior of the structure and static friction (`[estimator]`), the sample rate,
+    /// sensor noise levels and displacement range.
     pub fn prior(&self) -> ssvr_proto::Specimen {
         ssvr_proto::Specimen {
-            structure: *self.structure.params(),
-            static_friction_coefficient: self.static_friction_coefficient,
+            structure: self.estimator.params,
+            static_friction_coefficient: self.estimator.static_friction_coefficient,
             sample_rate_hz: self.rate_hz,
             disp_noise_rms_m: self.sensors.disp_noise_rms_m,
             accel_noise_rms_m_s2: self.sensors.accel_noise_rms_m_s2,

@@ -154,15 +154,27 @@ pub fn cargo_build(
 }
 
 /// The scene parameters the firmware compiles in, as a scene TOML in host-sim's layout (what
-/// `firmware/build.rs` reads): structure, static friction, gravity, sample rate, displacement
-/// noise and ranges.
+/// `firmware/build.rs` reads): the estimator's prior of the structure and static friction (as
+/// `[structure]`), gravity, sample rate, sensor noise and ranges, and the rest before the input.
 /// Values are written with Rust's round-trip float formatting, so the image gets exactly the
 /// scene's f64 values (and checks log headers against them bit for bit). Two scenes with the
 /// same parameters give the same text, hence the same image without a rebuild.
 pub fn firmware_scene_toml(scene: &Scene) -> String {
-    let p = scene.structure.params();
+    // The firmware compiles in what the controller is told: the prior (`[estimator]`), written
+    // as its `[structure]`.
+    let p = &scene.estimator.params;
     let s = &scene.sensors;
-    format!(
+    // The rest before the input (`[input] start_s`): the firmware reads only `start_s` of the
+    // input (its motion is the log's), so a placeholder motion carries it.
+    let rest = if scene.start_s > 0.0 {
+        format!(
+            "\n[input]\nkind = \"harmonic\"\namplitude_m_s2 = 0.0\nperiod_s = 1.0\nstart_s = {:?}\n",
+            scene.start_s
+        )
+    } else {
+        String::new()
+    };
+    let text = format!(
         "# Written by host-sim (qemu::image::firmware_scene_toml): the firmware parameters of a scene.\n\
          gravity_m_s2 = {g:?}\n\n[structure]\nm1_kg = {m1:?}\nm2_kg = {m2:?}\n\
          natural_frequency_hz = {f:?}\ndamping_ratio = {xi:?}\nfriction_coefficient = {mu:?}\n\
@@ -175,13 +187,14 @@ pub fn firmware_scene_toml(scene: &Scene) -> String {
         f = p.natural_frequency_hz,
         xi = p.damping_ratio,
         mu = p.friction_coefficient,
-        mu_s = scene.static_friction_coefficient,
+        mu_s = scene.estimator.static_friction_coefficient,
         rate = scene.rate_hz,
         ar = s.accel_range_m_s2,
         dr = s.disp_range_m,
         dn = s.disp_noise_rms_m,
         an = s.accel_noise_rms_m_s2,
-    )
+    );
+    text + &rest
 }
 
 /// Images built for a scene by [`build_for_scene`].

@@ -12,7 +12,8 @@ use ssvr_proto::log::{encode_header, encode_record, Header, MAX_RECORD_LEN};
 use ssvr_proto::Sample;
 use std::path::Path;
 
-/// The log header of a scene: its sample rate and structure, `options`, `sample_count`.
+/// The log header of a scene: its sample rate and the structure the controller is told (the
+/// estimator's prior, which the image is built for), `options`, `sample_count`.
 pub fn header_for(scene: &Scene, options: u16, samples: usize) -> Result<Header> {
     let count = u32::try_from(samples)
         .ok()
@@ -20,7 +21,7 @@ pub fn header_for(scene: &Scene, options: u16, samples: usize) -> Result<Header>
         .ok_or_else(|| anyhow!("too many samples for one log: {samples}"))?;
     Ok(Header::new(
         scene.rate_hz,
-        *scene.structure.params(),
+        scene.estimator.params,
         options,
         count,
     ))
