@@ -244,11 +244,15 @@ impl<const N: usize> PhaseDetector<N> {
     }
 
     /// Process one sample of the slip acceleration, base minus table accelerometer (m/s²). A
-    /// non-finite sample repeats the previous one.
+    /// non-finite sample continues the last two linearly.
     pub fn process(&mut self, slip_accel: f32) -> Option<SlipEvent> {
         let k = self.k;
         let a = if slip_accel.is_finite() {
             self.unbias(slip_accel)
+        } else if k > 1 {
+            // A missing sample: s̈ continued linearly (a repeated value would be a kink, which
+            // the jump test could take for a change of the friction force).
+            2.0 * self.at(k - 1) - self.at(k - 2)
         } else if k > 0 {
             self.at(k - 1)
         } else {
