@@ -11,8 +11,8 @@
 //! 1. flags: `NOT_FINITE` if a channel is NaN/inf; `MISSING` with `ADC_ERROR`; the displacement
 //!    is unusable (`DISP_INVALID`) if the sample is missing, the displacement is not finite,
 //!    flagged saturated upstream, or at or beyond the displacement full scale; the
-//!    accelerometers' offsets are removed ([`Zeroing`] on a rest before the input); a missing or
-//!    non-finite table acceleration is replaced, for the model, by the last usable one;
+//!    accelerometers' offsets are removed ([`Zeroing`] on a rest before the input) (a missing
+//!    sample's channels are NaN: the stick-slip estimator holds its last table acceleration);
 //! 2. the detector processes its input ([`crate::DetectorInput::of`]; NaN when unusable);
 //!    its event, or with [`EventSource::Log`] the sample's logged reversal, is the sample's;
 //! 3. the event goes to the model ([`Model::push`]) before the sample's prediction: flags
@@ -77,9 +77,6 @@ pub struct Pipeline<M, D> {
     disp_range_m: f32,
     index: u32,
     zeroing: Zeroing,
-    /// The last usable table acceleration (m/s², offsets removed): held for the model over a
-    /// missing sample.
-    last_table: f32,
     /// Counters.
     pub stats: Stats,
 }
@@ -94,7 +91,6 @@ impl<M: Model, D: EventDetector> Pipeline<M, D> {
             disp_range_m,
             index: 0,
             zeroing: Zeroing::new(0),
-            last_table: 0.0,
             stats: Stats::default(),
         }
     }
@@ -176,14 +172,6 @@ impl<M: Model, D: EventDetector> Pipeline<M, D> {
         }
         let mut channels = s.channels;
         self.zeroing.apply(self.index, &mut channels, f);
-        // The model is driven by the table acceleration: over a missing or non-finite one it
-        // holds the last usable value (a dropped frame costs a sample's error, not a blow-up).
-        let table = &mut channels[Channel::TableAccel.index()];
-        if table.is_finite() && f & flags::MISSING == 0 {
-            self.last_table = *table;
-        } else {
-            *table = self.last_table;
-        }
         let detected = self.detector.process(D::INPUT.of(&channels, f));
         let event = match self.source {
             EventSource::Detector => detected.as_ref().map(Event::from_detector),
