@@ -1,0 +1,127 @@
+//! The keys of the controller's prior (`[estimator]`), the sensor imperfections (`[sensors]`
+//! offsets, gains, dropouts) and the rest before the input (`[input] start_s`): defaults,
+//! values, the prior's defaulting rule, and bad values named with file, line and key.
+
+mod common;
+use common::{error_at, parse, BASE};
+use ssvr_scene::{Specimen, TableMotion};
+use std::path::Path;
+
+#[test]
+fn without_the_new_keys_everything_is_as_before() {
+    let s = parse(BASE).unwrap();
+    assert_eq!(s.estimator.params, *s.structure.params());
+    assert_eq!(
+        s.estimator.static_friction_coefficient,
+        s.static_friction_coefficient
+    );
+    assert_eq!(s.start_s, 0.0);
+    assert_eq!(s.sensors.accel_bias_m_s2, [0.0; 3]);
+    assert_eq!(s.sensors.accel_gain_error, [0.0; 3]);
+    assert_eq!(s.sensors.disp_bias_m, 0.0);
+    assert_eq!(s.sensors.dropout_probability, 0.0);
+    assert!(matches!(s.table_motion(), TableMotion::Harmonic { .. }));
+}
+
+#[test]
+fn the_prior_defaults_key_by_key_to_the_structure() {
+    let text = BASE.replace(
+        "[input]",
+        "[estimator]\nnatural_frequency_hz = 7.3\ndamping_ratio = 0.08\n[input]",
+    );
+    let s = parse(&text).unwrap();
+    let (p, t) = (s.estimator.params, *s.structure.params());
+    assert_eq!(p.natural_frequency_hz, 7.3);
+    assert_eq!(p.damping_ratio, 0.08);
+    assert_eq!(
+        (p.m1_kg, p.m2_kg, p.friction_coefficient),
+        (t.m1_kg, t.m2_kg, 0.2)
+    );
+    assert_eq!(t.natural_frequency_hz, 7.0, "the truth keeps [structure]");
+    // The prior's static coefficient: the structure's when it is at least the prior's μ ...
+    let text = BASE
+        .replace(
+            "friction_coefficient = 0.2",
+            "friction_coefficient = 0.2\nstatic_friction_coefficient = 0.25",
+        )
+        .replace(
+            "[input]",
+            "[estimator]\nfriction_coefficient = 0.22\n[input]",
+        );
+    let s = parse(&text).unwrap();
+    assert_eq!(s.estimator.static_friction_coefficient, 0.25);
+    // ... else the prior's μ; an explicit one is checked against the prior's μ.
+    let text = BASE.replace(
+        "[input]",
+        "[estimator]\nfriction_coefficient = 0.3\nnatural_period_s = 0.125\n[input]",
+    );
+    let s = parse(&text).unwrap();
+    assert_eq!(s.estimator.static_friction_coefficient, 0.3);
+    assert_eq!(s.estimator.params.natural_frequency_hz, 8.0);
+    let spec = Specimen::from(&s).prior();
+    assert_eq!(spec.structure, s.estimator.params);
+    assert_eq!(spec.static_friction_coefficient, 0.3);
+}
+
+#[test]
+fn sensor_imperfections_and_the_rest_are_read() {
+    let text = BASE.replace("[input]", "[input]\nstart_s = 0.5").to_string()
+        + "[sensors]\naccel_bias_m_s2 = [0.3, -0.2, 0.1]\naccel_gain_error = [0.0, 0.01, -0.01]\ndisp_bias_m = 1e-3\ndropout_probability = 0.01\n";
+    let s = parse(&text).unwrap();
+    assert_eq!(s.sensors.accel_bias_m_s2, [0.3, -0.2, 0.1]);
+    assert_eq!(s.sensors.accel_gain_error, [0.0, 0.01, -0.01]);
+    assert_eq!(s.sensors.disp_bias_m, 1e-3);
+    assert_eq!(s.sensors.dropout_probability, 0.01);
+    assert_eq!(s.start_s, 0.5);
+    let m = s.table_motion();
+    assert_eq!(m.accel(0.49), 0.0, "at rest before start_s");
+    let plain = parse(BASE).unwrap().table_motion();
+    for t in [0.5, 0.51, 0.7, 1.2] {
+        assert_eq!(m.accel(t), plain.accel(t - 0.5));
+    }
+    let spec = Specimen::parse(&text, Path::new("scenes/x.toml")).unwrap();
+    assert_eq!(spec.start_s, 0.5);
+}
+
+#[test]
+fn bad_values_are_named_with_file_line_and_key() {
+    let est = |kv: &str| BASE.replace("[input]", &format!("[estimator]\n{kv}\n[input]"));
+    // The [estimator] table starts at line 9 in these texts; its key is on line 10.
+    error_at(
+        &est("damping_ratio = 1.5"),
+        10,
+        &["[estimator] damping_ratio"],
+    );
+    error_at(&est("m1_kg = -1.0"), 10, &["[estimator] m1_kg"]);
+    error_at(
+        &est("static_friction_coefficient = 0.1"),
+        10,
+        &["[estimator] static_friction_coefficient"],
+    );
+    error_at(
+        &est("natural_frequency_hz = 7.0\nnatural_period_s = 0.1"),
+        11,
+        &["[estimator] natural_period_s", "not both"],
+    );
+    error_at(&est("mass = 3.0"), 10, &["unknown", "mass"]);
+    let sens = |kv: &str| format!("{BASE}[sensors]\n{kv}\n");
+    let line = BASE.lines().count() + 2;
+    error_at(
+        &sens("accel_bias_m_s2 = [0.1, 0.2]"),
+        line,
+        &["[sensors] accel_bias_m_s2", "3 finite numbers"],
+    );
+    error_at(
+        &sens("accel_gain_error = [0.0, -1.0, 0.0]"),
+        line,
+        &["[sensors] accel_gain_error", "> -1"],
+    );
+    error_at(
+        &sens("dropout_probability = 1.0"),
+        line,
+        &["[sensors] dropout_probability"],
+    );
+    error_at(&sens("disp_bias_m = nan"), line, &["[sensors] disp_bias_m"]);
+    let rest = |v: &str| BASE.replace("[input]", &format!("[input]\nstart_s = {v}"));
+    error_at(&rest("-0.1"), 10, &["[input] start_s"]);
+}
