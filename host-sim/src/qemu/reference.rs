@@ -13,7 +13,9 @@ use anyhow::{anyhow, Result};
 use ssvr_core::closed_form::duhamel::{DuhamelClosedForm, Reversal, ReversalTrain};
 use ssvr_core::math::Libm;
 use ssvr_core::stick_slip::StickSlipEstimator;
+use ssvr_core::Structure;
 use ssvr_proto::plan::MAX_HISTORY;
+use ssvr_proto::zeroing::Zeroing;
 use ssvr_proto::{flags, Frame, ModelKind as Model, Plan, Sample};
 
 /// The friction train the estimator was given, as the firmware's frames report it, for the
@@ -85,6 +87,8 @@ pub enum Reference {
     },
     /// The stick-slip estimator in f64 on the detected events (stick-slip, fixed-base).
     StickSlip {
+        /// The accelerometers zeroed on the rest as the pipeline zeroes them (the same code).
+        zeroing: Zeroing,
         /// The estimator in f64.
         est: Box<StickSlipEstimator<f64, Libm, MAX_HISTORY>>,
         /// The plan's longest back-dating (older events are clamped to it, as the firmware does).
@@ -99,17 +103,21 @@ pub enum Reference {
 }
 
 impl Reference {
-    /// The reference of a plan's model for a scene.
+    /// The reference of a plan's model for a scene: the structure the controller is told (the
+    /// plan's prior), as the firmware's model.
     pub fn new(scene: &Scene, plan: &Plan) -> Result<Self> {
+        let prior = Structure::new(plan.specimen.structure)
+            .map_err(|e| anyhow!("the prior specimen is invalid: {e}"))?;
         Ok(match plan.model {
             Model::Rectangular => Reference::ClosedForm {
-                cf: DuhamelClosedForm::new(&scene.structure),
+                cf: DuhamelClosedForm::new(&prior),
                 train: Box::default(),
             },
             Model::StickSlip | Model::FixedBase => Reference::StickSlip {
+                zeroing: Zeroing::new(plan.rest_samples),
                 est: Box::new(
                     StickSlipEstimator::with_history(
-                        &scene.structure,
+                        &prior,
                         scene.rate_hz,
                         plan.stick_slip,
                         plan.history,
@@ -145,12 +153,15 @@ impl Reference {
                 Ok(cf.evaluate(&train.train(), t, usize::MAX).accel_m_s2)
             }
             Reference::StickSlip {
+                zeroing,
                 est,
                 max_age,
                 last,
                 level_changes,
                 out_of_order,
             } => {
+                let mut channels = s.channels;
+                zeroing.apply(k as u32, &mut channels, f.flags);
                 if let Some(e) = f.event.filter(|_| f.flags & flags::EVENT_PUSHED != 0) {
                     let phase = if e.is_stick() { 0 } else { e.level };
                     let age = e.age_samples.min(*max_age);
@@ -168,12 +179,12 @@ impl Reference {
                 }
                 let top_valid = f.flags & (flags::SATURATED | flags::MISSING) == 0;
                 let top = if top_valid {
-                    f64::from(s.channels[ssvr_proto::Channel::TopAccel.index()])
+                    f64::from(channels[ssvr_proto::Channel::TopAccel.index()])
                 } else {
                     f64::NAN
                 };
                 Ok(est.update(
-                    f64::from(s.channels[ssvr_proto::Channel::TableAccel.index()]),
+                    f64::from(channels[ssvr_proto::Channel::TableAccel.index()]),
                     top,
                 ))
             }
