@@ -69,7 +69,10 @@ impl Errors {
         self.predicted.add(t, p.predicted as f64, truth);
         self.rectangular.add(t, p.rectangular as f64, truth);
         self.ideal.add(t, p.ideal as f64, truth);
-        self.measured.add(t, p.measured as f64, truth);
+        // (A dropped frame has no measurement: NaN, not part of the accelerometer's error.)
+        if p.measured.is_finite() {
+            self.measured.add(t, p.measured as f64, truth);
+        }
         self.truth_peak = self.truth_peak.max(truth.abs());
     }
 }
