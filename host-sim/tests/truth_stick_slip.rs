@@ -392,9 +392,8 @@ fn a_delayed_input_is_the_same_response_later() {
             motion: Box::new(motion.clone()),
         };
         let a = simulate(&TruthInput::new(&s, &motion, 2.0).with_static_friction(0.25)).unwrap();
-        let b =
-            simulate(&TruthInput::new(&s, &delayed, 2.0 + start).with_static_friction(0.25))
-                .unwrap();
+        let b = simulate(&TruthInput::new(&s, &delayed, 2.0 + start).with_static_friction(0.25))
+            .unwrap();
         assert_eq!(a.events().len(), b.events().len());
         for (ea, eb) in a.events().iter().zip(b.events()) {
             // Measured 4.9e-15 s.

@@ -41,8 +41,7 @@ impl Forcing {
                 let mid = omega * (t0 + 0.5 * tau) - phase;
                 let (sm, cm) = mid.sin_cos();
                 let d1 = 2.0 * amp / omega * sm * half;
-                let d2 =
-                    amp / omega * ((omega * t0 - phase).cos() * tau - 2.0 * cm * half / omega);
+                let d2 = amp / omega * ((omega * t0 - phase).cos() * tau - 2.0 * cm * half / omega);
                 (d1, d2)
             }
         }
