@@ -160,9 +160,8 @@ mod tests {
     use crate::truth::{simulate, TruthInput};
     use ssvr_core::{Structure, StructureParams};
 
-    #[test]
-    fn noise_has_the_configured_rms_and_is_seeded() {
-        let s = Structure::new(StructureParams {
+    fn table1() -> Structure {
+        Structure::new(StructureParams {
             m1_kg: 29.5,
             m2_kg: 1.75,
             natural_frequency_hz: 7.0,
@@ -170,7 +169,21 @@ mod tests {
             friction_coefficient: 0.2,
             gravity_m_s2: 9.80665,
         })
-        .unwrap();
+        .unwrap()
+    }
+
+    /// The default scene's truth (2 m/s² at 0.143 s: sticking and sliding), `duration_s` long.
+    fn sliding_truth(duration_s: f64) -> Truth {
+        let table = TableMotion::Harmonic {
+            amplitude_m_s2: 2.0,
+            period_s: 0.143,
+        };
+        simulate(&TruthInput::new(&table1(), &table, duration_s)).unwrap()
+    }
+
+    #[test]
+    fn noise_has_the_configured_rms_and_is_seeded() {
+        let s = table1();
         let table = TableMotion::None;
         let truth = simulate(&TruthInput::new(&s, &table, 1.0)).unwrap();
         let cfg = Sensors::default();
@@ -186,5 +199,104 @@ mod tests {
         assert!((acc / 5e-3 - 1.0).abs() < 0.05, "accel rms {acc}");
         assert!((disp / 1e-6 - 1.0).abs() < 0.05, "disp rms {disp}");
         assert!(a.iter().all(|(_, s)| s.flags == 0));
+    }
+
+    #[test]
+    fn offsets_and_gain_errors_are_applied_exactly() {
+        let truth = sliding_truth(1.0);
+        let cfg = Sensors {
+            accel_noise_rms_m_s2: 0.0,
+            disp_noise_rms_m: 0.0,
+            accel_bias_m_s2: [0.3, -0.2, 0.1],
+            accel_gain_error: [0.02, 0.01, -0.01],
+            disp_bias_m: 1e-3,
+            ..Sensors::default()
+        };
+        let frames = measure_all(&cfg, &truth, 1e4, 10_000);
+        assert_eq!(frames.len(), 10_000);
+        // The 24-bit ADC's step over ±39.2266 m/s² (4.7e-6 m/s²): at most half of it, then f32.
+        let lsb = cfg.accel_range_m_s2 / 2f64.powi(cfg.accel_adc_bits as i32 - 1);
+        let mut worst = 0f64;
+        for (t, f) in &frames {
+            let truths = [t.table_accel_m_s2, t.base_accel_m_s2, t.top_accel_m_s2];
+            let measured = [f.table_accel_m_s2, f.base_accel_m_s2, f.top_accel_m_s2];
+            for i in 0..3 {
+                let want = (1.0 + cfg.accel_gain_error[i]) * truths[i] + cfg.accel_bias_m_s2[i];
+                let err = (measured[i] as f64 - want).abs();
+                let tol = 0.5 * lsb + want.abs() * f32::EPSILON as f64;
+                assert!(err <= tol, "k = {} channel {i}: {err} > {tol}", f.k);
+                worst = worst.max(err);
+            }
+            let want = t.slip_m + cfg.disp_bias_m;
+            assert!(
+                (f.disp_m as f64 - want).abs() <= want.abs() * f32::EPSILON as f64,
+                "k = {}: displacement {} != {want}",
+                f.k,
+                f.disp_m
+            );
+            assert_eq!(f.flags, 0);
+        }
+        assert!(worst > 0.0 && worst <= 0.5 * lsb + 1e-6, "worst {worst}");
+        // The defaults are a perfect sensor: with them the same truth measures the truth.
+        let perfect = Sensors {
+            accel_noise_rms_m_s2: 0.0,
+            disp_noise_rms_m: 0.0,
+            ..Sensors::default()
+        };
+        for ((t, f), (_, g)) in measure_all(&perfect, &truth, 1e4, 10_000)
+            .iter()
+            .zip(&frames)
+        {
+            assert!((f.top_accel_m_s2 as f64 - t.top_accel_m_s2).abs() <= 0.5 * lsb + 1e-6);
+            assert_eq!(f.disp_m, t.slip_m as f32);
+            assert_ne!(f.top_accel_m_s2, g.top_accel_m_s2);
+        }
+    }
+
+    #[test]
+    fn dropouts_have_the_configured_rate_and_leave_the_other_samples_unchanged() {
+        let truth = sliding_truth(10.0);
+        let n = 100_000;
+        let p = 0.01;
+        let clean = measure_all(&Sensors::default(), &truth, 1e4, n);
+        let cfg = Sensors {
+            dropout_probability: p,
+            ..Sensors::default()
+        };
+        let dropped = measure_all(&cfg, &truth, 1e4, n);
+        assert_eq!((clean.len(), dropped.len()), (n as usize, n as usize));
+        let mut missing = 0u64;
+        for ((_, c), (_, d)) in clean.iter().zip(&dropped) {
+            assert_eq!(c.k, d.k);
+            if d.flags & FLAG_MISSING != 0 {
+                missing += 1;
+                assert_eq!(d.flags, FLAG_MISSING);
+                assert!(d.table_accel_m_s2.is_nan() && d.base_accel_m_s2.is_nan());
+                assert!(d.top_accel_m_s2.is_nan() && d.disp_m.is_nan());
+            } else {
+                // Bit for bit (NaN-free frames: `==` is bitwise here).
+                assert_eq!(c, d, "k = {}", c.k);
+            }
+        }
+        // Binomial: mean n·p = 1000, σ = sqrt(n·p·(1 − p)) ≈ 31.5; within 5 σ.
+        let (mean, sigma) = (n as f64 * p, (n as f64 * p * (1.0 - p)).sqrt());
+        assert!(
+            (missing as f64 - mean).abs() <= 5.0 * sigma,
+            "{missing} missing of {n}, expected {mean} ± {sigma}"
+        );
+        // Seeded: the same dropouts again; another seed drops other samples.
+        assert_eq!(
+            measure_all(&cfg, &truth, 1e4, n)
+                .iter()
+                .map(|(_, f)| f.flags)
+                .collect::<Vec<_>>(),
+            dropped.iter().map(|(_, f)| f.flags).collect::<Vec<_>>()
+        );
+        let other = Sensors { seed: 2, ..cfg };
+        let other = measure_all(&other, &truth, 1e4, n);
+        assert!(other
+            .iter()
+            .zip(&dropped)
+            .any(|((_, a), (_, b))| a.flags != b.flags));
     }
 }
