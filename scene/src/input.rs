@@ -118,7 +118,11 @@ impl ParseContext<'_> {
         if *r.kind.get_ref() == Kind::Reversals {
             return Err(self.err(
                 v.span(),
-                "[input] start_s: a reversals input has no table motion to start".into(),
+                format!(
+                    "[input] start_s = {} does not apply to kind = \"reversals\" (a friction \
+                     train has no table motion to start late)",
+                    v.get_ref()
+                ),
             ));
         }
         self.check(

@@ -125,3 +125,99 @@ fn bad_values_are_named_with_file_line_and_key() {
     let rest = |v: &str| BASE.replace("[input]", &format!("[input]\nstart_s = {v}"));
     error_at(&rest("-0.1"), 10, &["[input] start_s"]);
 }
+
+#[test]
+fn a_rest_before_a_record_shifts_its_times_and_keeps_the_duration() {
+    let dir = common::scenes_dir();
+    let plain = ssvr_scene::Scene::load(dir.join("elcentro.toml")).unwrap();
+    let text = std::fs::read_to_string(dir.join("elcentro.toml"))
+        .unwrap()
+        .replace("[input]", "[input]\nstart_s = 0.75");
+    let late = ssvr_scene::Scene::parse(&text, &dir.join("late.toml")).unwrap();
+    assert_eq!(late.start_s, 0.75);
+    // The run still covers [0, duration_s): the rest is part of it.
+    assert_eq!(
+        (late.samples, late.duration_s),
+        (plain.samples, plain.duration_s)
+    );
+    let (m, p) = (late.table_motion(), plain.table_motion());
+    for t in [0.0, 0.3, 0.7499] {
+        assert_eq!(m.accel(t), 0.0, "at rest at t = {t}");
+    }
+    for t in [0.75, 0.8, 1.0123, 3.3, 10.0] {
+        assert_eq!(m.accel(t), p.accel(t - 0.75), "t = {t}");
+    }
+}
+
+#[test]
+fn more_keys_and_their_errors() {
+    // Integers are numbers too; a period instead of a frequency; static friction given alone.
+    let text = BASE.replace(
+        "[input]",
+        "[estimator]\nnatural_period_s = 0.25\nstatic_friction_coefficient = 0.3\n[input]",
+    ) + "[sensors]\naccel_bias_m_s2 = [0, 1, -1]\naccel_gain_error = [0, 0, 0.02]\n";
+    let s = parse(&text).unwrap();
+    assert_eq!(s.estimator.params.natural_frequency_hz, 4.0);
+    assert_eq!(s.estimator.static_friction_coefficient, 0.3);
+    assert_eq!(s.estimator.params.friction_coefficient, 0.2);
+    assert_eq!(s.sensors.accel_bias_m_s2, [0.0, 1.0, -1.0]);
+    assert_eq!(s.sensors.accel_gain_error, [0.0, 0.0, 0.02]);
+    // The board's view of a scene (no input needed) reads the same prior.
+    let spec = Specimen::parse(&text, Path::new("scenes/x.toml")).unwrap();
+    assert_eq!(spec.estimator, s.estimator);
+    assert_eq!(spec.prior().structure.natural_frequency_hz, 4.0);
+    assert_eq!(spec.prior().static_friction_coefficient, 0.3);
+    assert_eq!(spec.sensors, s.sensors);
+
+    let est = |kv: &str| BASE.replace("[input]", &format!("[estimator]\n{kv}\n[input]"));
+    error_at(
+        &est("natural_period_s = -0.1"),
+        10,
+        &["[estimator] natural_period_s = -0.1", "expected"],
+    );
+    error_at(
+        &est("natural_frequency_hz = 0.0"),
+        10,
+        &["[estimator] natural_frequency_hz = 0", "expected"],
+    );
+    error_at(&est("m2_kg = inf"), 10, &["[estimator] m2_kg", "finite"]);
+    error_at(
+        &est("friction_coefficient = -0.2"),
+        10,
+        &["[estimator] friction_coefficient = -0.2"],
+    );
+    // The estimator's own static coefficient is checked against its own kinetic one.
+    error_at(
+        &est("friction_coefficient = 0.3\nstatic_friction_coefficient = 0.25"),
+        11,
+        &["[estimator] static_friction_coefficient = 0.25", ">="],
+    );
+    let sens = |kv: &str| format!("{BASE}[sensors]\n{kv}\n");
+    let line = BASE.lines().count() + 2;
+    error_at(
+        &sens("accel_bias_m_s2 = [0.1, nan, 0.2]"),
+        line,
+        &["[sensors] accel_bias_m_s2", "3 finite numbers"],
+    );
+    error_at(
+        &sens("accel_gain_error = [0.0, 0.0, 0.0, 0.0]"),
+        line,
+        &["[sensors] accel_gain_error", "3 finite numbers"],
+    );
+    error_at(
+        &sens("dropout_probability = -0.01"),
+        line,
+        &["[sensors] dropout_probability = -0.01", "expected"],
+    );
+    let rest = |v: &str| BASE.replace("[input]", &format!("[input]\nstart_s = {v}"));
+    error_at(&rest("inf"), 10, &["[input] start_s", "finite"]);
+    let reversals = BASE.replace(
+        "kind = \"harmonic\"\namplitude_m_s2 = 2.0\nperiod_s = 0.143",
+        "kind = \"reversals\"\nhalf_period_s = 0.0715\nstart_s = 0.5",
+    );
+    error_at(
+        &reversals,
+        12,
+        &["[input] start_s = 0.5", "kind = \"reversals\""],
+    );
+}
