@@ -11,6 +11,7 @@ pub mod check;
 pub mod peak;
 pub mod qemu;
 pub mod reproduce;
+pub mod robustness;
 pub mod run;
 pub mod trace;
 
@@ -51,6 +52,10 @@ enum Command {
     /// Regenerate the paper's results (Table 2, Figs 6, 9, 10, sliding response spectra) as
     /// figures and a report.md, sweeps in parallel.
     Reproduce(reproduce::ReproduceArgs),
+    /// The robustness scorecard: `run` on perturbed copies of three scenes (the prior told off,
+    /// accelerometer offsets and gains, dropped frames, a rest before the input), in both modes:
+    /// error against perturbation, robustness.json/.md/.png.
+    Robustness(robustness::RobustnessArgs),
 }
 
 impl Cli {
@@ -65,6 +70,7 @@ impl Cli {
             Some(Command::Qemu(args)) => qemu::command(args),
             Some(Command::Bench(args)) => bench::command(args),
             Some(Command::Reproduce(args)) => reproduce::command(args),
+            Some(Command::Robustness(args)) => robustness::command(args),
         }
     }
 }

@@ -9,6 +9,7 @@
 pub mod bench;
 pub mod figure;
 pub mod reproduce;
+pub mod robustness;
 pub mod run;
 mod style;
 
