@@ -5,6 +5,7 @@ use crate::plot::robustness::figure;
 use crate::report::robustness::{markdown, perturbations, quick_perturbations, scenes, scorecard};
 use anyhow::{Context, Result};
 use ssvr_proto::Mode;
+use std::io::IsTerminal;
 use std::path::PathBuf;
 
 /// Arguments of `robustness`.
@@ -29,7 +30,8 @@ pub fn command(args: RobustnessArgs) -> Result<()> {
     } else {
         (vec![Mode::Fuse, Mode::Predict], perturbations())
     };
-    let rows = scorecard(&scenes, &modes, &perts)?;
+    let progress = std::io::stderr().is_terminal();
+    let rows = scorecard(&scenes, &modes, &perts, progress)?;
     let dir = &args.out;
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     let json = serde_json::to_string_pretty(&serde_json::json!({ "rows": rows }))
@@ -39,9 +41,11 @@ pub fn command(args: RobustnessArgs) -> Result<()> {
     let md = markdown(&rows);
     let p = dir.join("robustness.md");
     std::fs::write(&p, &md).with_context(|| format!("cannot write {}", p.display()))?;
-    crate::plot::figure::render_png(&figure(&rows), &dir.join("robustness.png"))?;
+    figure(&rows, &dir.join("robustness.png"))?;
     if args.json {
         println!("{json}");
+        let met = rows.iter().filter(|r| r.goal_met).count();
+        eprintln!("{met} of {} rows meet their goal", rows.len());
     } else {
         print!("{md}");
     }
