@@ -16,6 +16,8 @@ const FLOOR: f64 = 1e-3;
 const CEIL: f64 = 1e3;
 /// Height of one perturbation's band (px).
 const BAND: u32 = 30;
+/// Empty bands above the first perturbation, for the legend.
+const HEAD: f64 = 2.6;
 
 /// Render the figure of the rows to `path` (PNG). Errors name the file.
 pub fn figure(rows: &[Row], path: &Path) -> Result<()> {
@@ -39,7 +41,7 @@ pub fn figure(rows: &[Row], path: &Path) -> Result<()> {
     }
     let title_h = 50u32;
     let panel_w = 820u32;
-    let panel_h = BAND * ids.len() as u32 + 170;
+    let panel_h = BAND * ids.len() as u32 + 250;
     let size = (panel_w * modes.len() as u32, panel_h + title_h);
     let ctx = || format!("drawing the figure {}", path.display());
     {
@@ -98,7 +100,7 @@ fn panel<DB: DrawingBackend>(
         .margin(12)
         .x_label_area_size(55)
         .y_label_area_size(190)
-        .build_cartesian_2d((FLOOR..hi).log_scale(), 0.0..n)?;
+        .build_cartesian_2d((FLOOR..hi).log_scale(), 0.0..n + HEAD)?;
     chart
         .configure_mesh()
         .disable_y_mesh()
@@ -150,7 +152,7 @@ fn panel<DB: DrawingBackend>(
         .collect();
     chart.draw_series(over)?;
     chart.draw_series(DashedLineSeries::new(
-        [(goal, 0.0), (goal, n)],
+        [(goal, 0.0), (goal, n + HEAD)],
         6,
         4,
         BLACK.stroke_width(2),
