@@ -166,8 +166,15 @@ pub(super) fn run_detector(t: &mut Ticks, plan: &Plan, model: &Model, det: &Dete
     // The ramp at half the slope from −25 mm: it stays inside the displacement range (±50 mm
     // by default) over the whole block, so the detector slides throughout (beyond the range the
     // samples are flagged, the detector sees a stall and reports a stick with its costly fit).
+    // The slip acceleration (base − table) is zero for the first [`REST`] samples, the
+    // accelerometers' offset for the phase detector, then −0.25 m/s²: it slides throughout too.
     let sample = |i: u32| Sample {
-        channels: [0.5, 0.25, -0.125, 0.5 * triangle(i, ramp) - PIPELINE_X0_M],
+        channels: [
+            0.5,
+            if i < REST { 0.5 } else { 0.25 },
+            -0.125,
+            0.5 * triangle(i, ramp) - PIPELINE_X0_M,
+        ],
         flags: 0,
         reversal: None,
     };
