@@ -52,36 +52,13 @@ impl Default for Options {
     }
 }
 
-fn with<M: ssvr_proto::Model + 'static, D: EventDetector + 'static>(
-    plan: &Plan,
-    model: M,
-    opts: Options,
-) -> Result<Box<dyn Step>> {
+/// The pipeline of `plan`'s model (a [`model`]) and detector `D`.
+fn with_model<D: EventDetector + 'static>(plan: &Plan, opts: Options) -> Result<Box<dyn Step>> {
+    let m = model(plan, opts)?;
     let d = D::from_plan(plan).map_err(|e| anyhow!("detector: {e}"))?;
     Ok(Box::new(
-        Pipeline::new(model, d, opts.source, plan.disp_range_m()).with_rest(plan.rest_samples),
+        Pipeline::new(m, d, opts.source, plan.disp_range_m()).with_rest(plan.rest_samples),
     ))
-}
-
-fn with_model<D: EventDetector + 'static>(plan: &Plan, opts: Options) -> Result<Box<dyn Step>> {
-    match plan.model {
-        ModelKind::Rectangular => {
-            let m = RectangularModel::from_plan(plan)
-                .map_err(|e| anyhow!("estimator: {e}"))?
-                .with_zero_at_stick(opts.zero_at_stick);
-            with::<_, D>(plan, m, opts)
-        }
-        ModelKind::StickSlip => {
-            let m = StickSlipModel::<MAX_HISTORY>::from_plan(plan)
-                .map_err(|e| anyhow!("estimator: {e}"))?;
-            with::<_, D>(plan, m, opts)
-        }
-        ModelKind::FixedBase => {
-            let m = FixedBaseModel::<MAX_HISTORY>::from_plan(plan)
-                .map_err(|e| anyhow!("estimator: {e}"))?;
-            with::<_, D>(plan, m, opts)
-        }
-    }
 }
 
 /// The pipeline of a plan at sample 0: the firmware's model and detector types (the stick-slip
@@ -130,8 +107,9 @@ pub fn sample_of(f: &SensorFrame) -> Sample {
     }
 }
 
-/// The model of a plan alone, at rest (to drive it with other events than the detector's, e.g.
-/// the truth's own in `host-sim run`'s "ideal" estimator).
+/// The model of a plan, at rest: the firmware's model type (the stick-slip estimator with the
+/// host's storage of [`MAX_HISTORY`] samples). The pipeline drives it, and alone it takes other
+/// events than the detector's (the truth's own in `host-sim run`'s "ideal" estimator).
 pub fn model(plan: &Plan, opts: Options) -> Result<Box<dyn ssvr_proto::Model>> {
     Ok(match plan.model {
         ModelKind::Rectangular => Box::new(

@@ -258,13 +258,10 @@ impl Plan {
         if r.u32() != WORDS_VERSION {
             return Err(PlanError::Words);
         }
-        let code = r.u32();
-        let model = if code > u8::MAX as u32 {
-            None
-        } else {
-            ModelKind::from_code(code as u8)
-        };
-        let Some(model) = model else {
+        let Some(model) = (match byte(r.u32()) {
+            Some(c) => ModelKind::from_code(c),
+            None => None,
+        }) else {
             return Err(PlanError::Words);
         };
         let structure = StructureParams {
@@ -323,13 +320,10 @@ impl Plan {
             coefficients[i] = r.u32();
             i += 1;
         }
-        let code = r.u32();
-        let mode = if code > u8::MAX as u32 {
-            None
-        } else {
-            Mode::from_code(code as u8)
-        };
-        let Some(mode) = mode else {
+        let Some(mode) = (match byte(r.u32()) {
+            Some(c) => Mode::from_code(c),
+            None => None,
+        }) else {
             return Err(PlanError::Words);
         };
         let rest_samples = r.u32();
@@ -367,6 +361,15 @@ impl Plan {
             i += 1;
         }
         h
+    }
+}
+
+/// A word that holds a byte (an enum's code).
+const fn byte(w: u32) -> Option<u8> {
+    if w <= u8::MAX as u32 {
+        Some(w as u8)
+    } else {
+        None
     }
 }
 

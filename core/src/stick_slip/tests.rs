@@ -420,6 +420,7 @@ fn the_observer_error_decays_at_its_bandwidth() {
             let y = reference.update(u, f64::NAN);
             let pred = est.update(wrong, y);
             let err = (pred - y).abs();
+            assert!(err.is_finite(), "error at sample {k} is not finite: {err}");
             if k == inject {
                 e0 = err.max(1e-12);
             }

@@ -177,6 +177,29 @@ pub trait Model {
     fn revised(&self, sample: u64) -> Option<f32>;
 }
 
+/// A model chosen at run time (the host picks the firmware's model type from a plan).
+#[cfg(feature = "std")]
+impl<M: Model + ?Sized> Model for std::boxed::Box<M> {
+    fn kind(&self) -> ModelKind {
+        (**self).kind()
+    }
+    fn push(&mut self, e: &Event) -> Result<Pushed, Error> {
+        (**self).push(e)
+    }
+    fn note_inputs(&mut self, i: usize, channels: &[f32; CHANNELS], flags: u8) {
+        (**self).note_inputs(i, channels, flags)
+    }
+    fn predict_run(&mut self, frames: &mut [Frame], from: usize) {
+        (**self).predict_run(frames, from)
+    }
+    fn mu_estimate(&self) -> Option<MuEstimate> {
+        (**self).mu_estimate()
+    }
+    fn revised(&self, sample: u64) -> Option<f32> {
+        (**self).revised(sample)
+    }
+}
+
 /// A model built from a [`Plan`] (the same way on the firmware and on the host).
 pub trait FromPlan: Sized {
     /// The model of `plan`.
