@@ -35,6 +35,7 @@ pub mod closed_form;
 pub mod detect;
 pub mod error;
 pub mod math;
+pub mod oscillator_id;
 pub mod recursion;
 pub mod stick_slip;
 pub mod structure;

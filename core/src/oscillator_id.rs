@@ -1,0 +1,284 @@
+//! Online identification of the top oscillator: its natural frequency f and damping ratio ξ
+//! from the measured top and base accelerations ([`OscillatorIdentifier`]).
+//!
+//! **The relation.** The top mass is a free body on its spring and dashpot in every phase, stuck
+//! or sliding: ü1 = −p²δ − 2ξpδ' with δ = u1 − u2 (p = 2πf), and δ'' = ü1 − ü2 is measured by
+//! the top and base accelerometers. With A = ü1 and R = ü1 − ü2 (Laplace),
+//! s²·A = −(p² + 2ξp·s)·R. Both sides are filtered by the same H(s) = λ·s/(s + λ)⁴ (λ: the prior's
+//! p), which makes every term proper and removes constant offsets (the zero at s = 0: an offset
+//! of either accelerometer, or between them, only adds a decaying transient):
+//!
+//! Y = λ s³/(s+λ)⁴·A,  Φ1 = λ³ s/(s+λ)⁴·R,  Φ2 = λ² s²/(s+λ)⁴·R,  −Y = θ1·Φ1 + θ2·Φ2,
+//!
+//! with θ1 = (p/λ)² and θ2 = 2ξp/λ (both of order 1; all three signals are accelerations). With
+//! the scaled chain states ξk = (λ/(s+λ))^k·u (each of DC gain 1) the signals are binomial
+//! differences: Φ1 = ξ3 − ξ4, Φ2 = ξ2 − 2ξ3 + ξ4, Y = ξ1 − 3ξ2 + 3ξ3 − ξ4 (of A's chain).
+//!
+//! **Discretisation.** The accelerations are averaged over blocks of `decimation` samples
+//! (~1 kHz) and the chains advance exactly (matrix exponential of the Jordan block, computed in
+//! f64 at construction) with the block average held over the block. Both sides see the same
+//! operator, so the relation holds up to the aliasing of what lies above the decimated Nyquist
+//! frequency (the structure's motion lies far below it).
+//!
+//! **Estimation.** θ by recursive least squares in information form with forgetting ρ per
+//! block (normal equations S·θ = c, solved each block: one division), the a-priori residual's
+//! mean square tracked alongside. The standard deviations are the formal ones, σ²·S⁻¹, inflated
+//! by √(blocks per filter time constant) for the correlation the filters put between blocks.
+//! A sample whose top or base acceleration is missing (NaN) repeats the last valid pair.
+
+use crate::error::{check, Error, Param};
+use crate::math::Real;
+
+/// The identified oscillator.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OscillatorEstimate {
+    /// Natural frequency f (Hz).
+    pub natural_frequency_hz: f64,
+    /// Its standard deviation (Hz).
+    pub natural_frequency_std_hz: f64,
+    /// Damping ratio ξ.
+    pub damping_ratio: f64,
+    /// Its standard deviation.
+    pub damping_ratio_std: f64,
+    /// Blocks (least-squares updates) used.
+    pub blocks: u32,
+}
+
+/// Identifies f and ξ of the top oscillator from the top and base accelerations (see the module
+/// documentation). Per sample: two additions and a count; per block of `decimation` samples:
+/// the two filter chains and one least-squares update.
+#[derive(Debug, Clone)]
+pub struct OscillatorIdentifier<T> {
+    decimation: u32,
+    count: u32,
+    sum_a: T,
+    sum_r: T,
+    last: (T, T),
+    /// Chain maps: ξ ← E·(Σ taylor terms)·ξ + gamma·u; `phi[d]` = e^{−λh}(λh)^d/d!.
+    phi: [T; N],
+    gamma: [T; N],
+    inv_n: T,
+    xa: [T; N],
+    xr: [T; N],
+    /// Normal equations: S = [[s11, s12], [s12, s22]], c, with forgetting `rho`.
+    s: [T; 3],
+    c: [T; 2],
+    rho: T,
+    theta: [T; 2],
+    /// Mean square of the a-priori residual (smoothing `alpha`).
+    e2: T,
+    alpha: T,
+    /// Blocks skipped before the filters have settled.
+    warmup: u32,
+    blocks: u32,
+    lambda: f64,
+    /// Correlation inflation of the variances (blocks per filter time constant).
+    inflation: f64,
+}
+
+/// Length of the filter chains.
+const N: usize = 5;
+/// Decimated rate the identifier aims at (Hz).
+const DECIMATED_RATE_HZ: f64 = 1000.0;
+/// Largest decimation (samples per block).
+pub const MAX_DECIMATION: u32 = 64;
+
+impl<T: Real> OscillatorIdentifier<T> {
+    /// An identifier for samples at `sample_rate_hz`, its filters tuned to the prior's natural
+    /// frequency `prior_frequency_hz`, forgetting `forgetting` per sample in (0, 1].
+    pub fn new(
+        sample_rate_hz: f64,
+        prior_frequency_hz: f64,
+        forgetting: f64,
+    ) -> Result<Self, Error> {
+        check(
+            Param::SampleRate,
+            sample_rate_hz,
+            sample_rate_hz > 0.0 && sample_rate_hz.is_finite(),
+            "sample rate > 0 Hz",
+        )?;
+        check(
+            Param::NaturalFrequency,
+            prior_frequency_hz,
+            prior_frequency_hz > 0.0 && prior_frequency_hz < sample_rate_hz / 8.0,
+            "0 < natural frequency < sample rate / 8",
+        )?;
+        check(
+            Param::Forgetting,
+            forgetting,
+            forgetting > 0.0 && forgetting <= 1.0,
+            "forgetting factor in (0, 1]",
+        )?;
+        let d = libm::floor(sample_rate_hz / DECIMATED_RATE_HZ).clamp(1.0, MAX_DECIMATION as f64);
+        let decimation = d as u32;
+        let h = d / sample_rate_hz;
+        let lambda = 2.0 * core::f64::consts::PI * prior_frequency_hz;
+        let x = lambda * h;
+        let e = libm::exp(-x);
+        // φ_d = e^{−x} x^d / d!; γ_k = x^k/(k−1)! Σ_m (−x)^m/m!/(k + m) (k = 1..4), the scaled
+        // chain's response to a unit input held over the block, by its series for x < 1 (no
+        // cancellation) and in closed form otherwise.
+        let mut phi = [0.0f64; N];
+        let mut term = e;
+        for (dd, v) in phi.iter_mut().enumerate() {
+            *v = term;
+            term *= x / (dd as f64 + 1.0);
+        }
+        let mut gamma = [0.0f64; N];
+        for (k1, g) in gamma.iter_mut().enumerate() {
+            let k = k1 as f64 + 1.0;
+            if x < 1.0 {
+                let mut fact = 1.0; // (k−1)!
+                for j in 1..=k1 {
+                    fact *= j as f64;
+                }
+                let (mut sum, mut t) = (0.0, 1.0);
+                for m in 0..40 {
+                    sum += t / (k + m as f64);
+                    t *= -x / (m as f64 + 1.0);
+                }
+                *g = libm::pow(x, k) / fact * sum;
+            } else {
+                // 1 − e^{−x} Σ_{j<k} x^j/j!
+                let (mut sum, mut t) = (0.0, 1.0);
+                for j in 0..k1 + 1 {
+                    sum += t;
+                    t *= x / (j as f64 + 1.0);
+                }
+                *g = 1.0 - e * sum;
+            }
+        }
+        let blocks_per_tau = libm::fmax(1.0, 1.0 / x);
+        Ok(Self {
+            decimation,
+            count: 0,
+            sum_a: T::ZERO,
+            sum_r: T::ZERO,
+            last: (T::ZERO, T::ZERO),
+            phi: phi.map(T::from_f64),
+            gamma: gamma.map(T::from_f64),
+            inv_n: T::from_f64(1.0 / d),
+            xa: [T::ZERO; N],
+            xr: [T::ZERO; N],
+            s: [T::ZERO; 3],
+            c: [T::ZERO; 2],
+            rho: T::from_f64(libm::pow(forgetting, d)),
+            theta: [T::ONE, T::ZERO],
+            e2: T::ZERO,
+            alpha: T::from_f64(libm::fmin(1.0, 1.0 / (5.0 * blocks_per_tau))),
+            // Twenty filter time constants: the chains' start-up transient (t⁴e^{−λt}) has decayed to 3e-5.
+            warmup: (20.0 * blocks_per_tau) as u32 + 4,
+            blocks: 0,
+            lambda,
+            inflation: blocks_per_tau,
+        })
+    }
+
+    /// Samples per block.
+    pub fn decimation(&self) -> u32 {
+        self.decimation
+    }
+
+    /// One sample: the top acceleration and the base acceleration (NaN: missing; the last valid
+    /// pair is repeated).
+    #[inline(always)]
+    pub fn push(&mut self, top: T, base: T) {
+        let r = top - base;
+        if top.is_finite() && r.is_finite() {
+            self.last = (top, r);
+        }
+        self.sum_a += self.last.0;
+        self.sum_r += self.last.1;
+        self.count += 1;
+        if self.count >= self.decimation {
+            self.block();
+        }
+    }
+
+    #[inline(never)]
+    fn block(&mut self) {
+        let (ua, ur) = (self.sum_a * self.inv_n, self.sum_r * self.inv_n);
+        (self.sum_a, self.sum_r, self.count) = (T::ZERO, T::ZERO, 0);
+        advance(&mut self.xa, &self.phi, &self.gamma, ua);
+        advance(&mut self.xr, &self.phi, &self.gamma, ur);
+        if self.warmup > 0 {
+            self.warmup -= 1;
+            return;
+        }
+        let [_, a2, a3, a4, a5] = self.xa;
+        let [_, _, r3, r4, r5] = self.xr;
+        let t = -(a2 - T::from_f64(3.0) * (a3 - a4) - a5);
+        let f1 = r4 - r5;
+        let f2 = r3 - (r4 + r4) + r5;
+        let e = t - (self.theta[0] * f1 + self.theta[1] * f2);
+        let rho = self.rho;
+        let s = [
+            rho * self.s[0] + f1 * f1,
+            rho * self.s[1] + f1 * f2,
+            rho * self.s[2] + f2 * f2,
+        ];
+        let c = [rho * self.c[0] + f1 * t, rho * self.c[1] + f2 * t];
+        let det = s[0] * s[2] - s[1] * s[1];
+        let theta = [
+            (s[2] * c[0] - s[1] * c[1]) / det,
+            (s[0] * c[1] - s[1] * c[0]) / det,
+        ];
+        let e2 = self.e2 + (e * e - self.e2) * self.alpha;
+        let finite = s.iter().chain(&c).all(|v| v.is_finite()) && e2.is_finite();
+        if finite {
+            (self.s, self.c, self.e2) = (s, c, e2);
+            self.blocks = self.blocks.saturating_add(1);
+            // Too little excitation yet (a singular system): keep the last θ.
+            if theta[0].is_finite() && theta[1].is_finite() && theta[0] > T::ZERO {
+                self.theta = theta;
+            }
+        }
+    }
+
+    /// The estimate (`None` before any usable block).
+    pub fn estimate(&self) -> Option<OscillatorEstimate> {
+        if self.blocks < 2 {
+            return None;
+        }
+        let [s11, s12, s22] = self.s.map(T::to_f64);
+        let det = s11 * s22 - s12 * s12;
+        let (t1, t2) = (self.theta[0].to_f64(), self.theta[1].to_f64());
+        if !(det > 0.0 && t1 > 0.0) {
+            return None;
+        }
+        let var = self.e2.to_f64() * self.inflation;
+        let (v11, v22, v12) = (var * s22 / det, var * s11 / det, -var * s12 / det);
+        let r = libm::sqrt(t1);
+        let p = self.lambda * r;
+        let xi = t2 / (2.0 * r);
+        // f = λ√θ1/2π: σf = f·σθ1/(2θ1); ξ = θ2/(2√θ1): linearised.
+        let f = p / (2.0 * core::f64::consts::PI);
+        let df1 = -t2 / (4.0 * t1 * r);
+        let df2 = 1.0 / (2.0 * r);
+        let var_xi = df1 * df1 * v11 + 2.0 * df1 * df2 * v12 + df2 * df2 * v22;
+        Some(OscillatorEstimate {
+            natural_frequency_hz: f,
+            natural_frequency_std_hz: f * libm::sqrt(libm::fmax(v11, 0.0)) / (2.0 * t1),
+            damping_ratio: xi,
+            damping_ratio_std: libm::sqrt(libm::fmax(var_xi, 0.0)),
+            blocks: self.blocks,
+        })
+    }
+}
+
+/// One block of the scaled chain: ξ ← Φ·ξ + γ·u (Φ lower-triangular Toeplitz).
+#[inline(always)]
+fn advance<T: Real>(x: &mut [T; N], phi: &[T; N], gamma: &[T; N], u: T) {
+    let [x1, x2, x3, x4, x5] = *x;
+    // ξk' = −λξk + λξ(k−1), ξ0 = u: the block map couples ξk to ξj (j ≤ k) by φ(k−j).
+    *x = [
+        phi[0] * x1 + gamma[0] * u,
+        phi[0] * x2 + phi[1] * x1 + gamma[1] * u,
+        phi[0] * x3 + phi[1] * x2 + phi[2] * x1 + gamma[2] * u,
+        phi[0] * x4 + phi[1] * x3 + phi[2] * x2 + phi[3] * x1 + gamma[3] * u,
+        phi[0] * x5 + phi[1] * x4 + phi[2] * x3 + phi[3] * x2 + phi[4] * x1 + gamma[4] * u,
+    ];
+}
+
+#[cfg(test)]
+mod tests;
