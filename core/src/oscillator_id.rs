@@ -70,6 +70,8 @@ pub struct OscillatorIdentifier<T> {
     alpha: T,
     /// Blocks skipped before the filters have settled.
     warmup: u32,
+    /// Blocks seen.
+    started: u32,
     blocks: u32,
     lambda: f64,
     /// Correlation inflation of the variances (blocks per filter time constant).
@@ -166,8 +168,11 @@ impl<T: Real> OscillatorIdentifier<T> {
             theta: [T::ONE, T::ZERO],
             e2: T::ZERO,
             alpha: T::from_f64(libm::fmin(1.0, 1.0 / (5.0 * blocks_per_tau))),
-            // Twenty filter time constants: the chains' start-up transient (t⁴e^{−λt}) has decayed to 3e-5.
-            warmup: (20.0 * blocks_per_tau) as u32 + 4,
+            // The chains start at the first block's values (a constant offset then starts no
+            // transient); twelve filter time constants let what the start still gives (a jump
+            // of the input: t⁴e^{−λt}/24, 5e-3 of it) decay.
+            warmup: (12.0 * blocks_per_tau) as u32 + 4,
+            started: 0,
             blocks: 0,
             lambda,
             inflation: blocks_per_tau,
@@ -199,6 +204,11 @@ impl<T: Real> OscillatorIdentifier<T> {
     fn block(&mut self) {
         let (ua, ur) = (self.sum_a * self.inv_n, self.sum_r * self.inv_n);
         (self.sum_a, self.sum_r, self.count) = (T::ZERO, T::ZERO, 0);
+        if self.blocks == 0 && self.started == 0 {
+            // The first block: the chains in the steady state of its values.
+            (self.xa, self.xr) = ([ua; N], [ur; N]);
+        }
+        self.started = self.started.saturating_add(1);
         advance(&mut self.xa, &self.phi, &self.gamma, ua);
         advance(&mut self.xr, &self.phi, &self.gamma, ur);
         if self.warmup > 0 {

@@ -244,6 +244,8 @@ pub trait Step {
     fn max_age_samples(&self) -> usize;
     /// [`Pipeline::offsets`].
     fn offsets(&self) -> [f32; 3];
+    /// The model's identified and adopted f and ξ ([`Model::oscillator`]).
+    fn oscillator(&self) -> Option<crate::model::OscillatorReport>;
 }
 
 impl<M: Model, D: EventDetector> Step for Pipeline<M, D> {
@@ -267,5 +269,8 @@ impl<M: Model, D: EventDetector> Step for Pipeline<M, D> {
     }
     fn offsets(&self) -> [f32; 3] {
         Pipeline::offsets(self)
+    }
+    fn oscillator(&self) -> Option<crate::model::OscillatorReport> {
+        self.model.oscillator()
     }
 }

@@ -43,7 +43,11 @@ fn record(
     let amp = noise * libm::sqrt(3.0);
     let mut out = std::vec::Vec::new();
     for k in 0..(seconds * rate) as usize {
-        let q = if (k / flip).is_multiple_of(2) { 1.0 } else { -1.0 };
+        let q = if (k / flip).is_multiple_of(2) {
+            1.0
+        } else {
+            -1.0
+        };
         let top = -p * p * y[0] - 2.0 * xi * p * y[1];
         out.push((
             top + offsets.0 + amp * n.next(),

@@ -3,10 +3,11 @@
 use super::coefficients::StickSlipCoefficients;
 use super::config::{StickSlipConfig, MAX_IDENTIFY_EVERY};
 use super::identify::{Ident, Pending};
-use super::maps::{power, powi, StuckMap};
+use super::maps::{powi, StuckMap};
 use super::observer::observer_gain;
 use super::packed::{self, MAX_SWITCHES};
 use super::phase::{Level, SlidingPhase};
+use super::retune::block_maps;
 use super::rls::{MuEstimate, Rls};
 use crate::error::{Error, Param};
 use crate::math::{Real, Transcendentals};
@@ -168,10 +169,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
         )?;
         let gain = observer_gain::<T, M>(&c, cfg.observer_bandwidth);
         let n = cfg.identify_every;
-        // The n-step sliding maps, composed in f64 from the per-sample ones.
-        let per_sample = (c.phi_s.map(T::to_f64), c.force_s.map(T::to_f64));
-        let (block_a, block_f) = power(&per_sample, n);
-        let g = c.g.to_f64();
+        let (block_phi, block_force) = block_maps(&c, n);
         let alpha = if n == 1 {
             1e-3
         } else {
@@ -229,8 +227,8 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
                     end: 0,
                     sign: 0,
                 },
-                block_phi: block_a.map(T::from_f64),
-                block_force: [T::from_f64(g * block_f[0]), T::from_f64(g * block_f[1])],
+                block_phi,
+                block_force,
                 zh: [T::ZERO; 2],
                 zu: [T::ZERO; 2],
                 // Sample 0, at rest: the start of the first block.

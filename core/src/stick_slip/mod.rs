@@ -82,6 +82,7 @@ mod maps;
 mod observer;
 mod packed;
 mod phase;
+mod retune;
 mod ring;
 mod rls;
 mod step;

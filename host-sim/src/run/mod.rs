@@ -260,7 +260,12 @@ fn outcome(
         model: model.name(),
         mode: opts.mode.name(),
         model_reason,
-        identified: Identified::of(plan, mu.map(|m| m.mu), runner.pipe.offsets()),
+        identified: Identified::of(
+            plan,
+            mu.map(|m| m.mu),
+            runner.pipe.oscillator(),
+            runner.pipe.offsets(),
+        ),
         mu_estimate: mu.map(|m| m.mu),
         mu_std: mu.map(|m| m.std),
         revision_delay_ms: revised.then(|| 1e3 * rev.delay as f64 / rate),

@@ -54,8 +54,9 @@ impl TruthStats {
 }
 
 /// The specimen's parameters and the accelerometers' offsets as the estimator ends the run
-/// (`estimator.identified` in `run --json`). The natural frequency, the damping ratio and the
-/// static friction coefficient are the prior's (not identified online yet); the friction
+/// (`estimator.identified` in `run --json`). The natural frequency and the damping ratio are the
+/// online estimates when the model identifies them (stick-slip and fixed-base models, fuse mode),
+/// else the prior's; the static friction coefficient is the prior's; the friction
 /// coefficient is μ̂ when the model identified it, else the prior's; the offsets are those the
 /// pipeline removed: table and top from the rest before the input (zero without one), the base
 /// from the rest plus the slip acceleration's offset its detector tracks (the base against the
@@ -72,18 +73,52 @@ pub struct Identified {
     pub static_friction_coefficient: f64,
     /// Offsets of the table, base and top accelerometers (m/s²).
     pub accel_bias_m_s2: [f64; 3],
+    /// Standard deviation of the identified natural frequency (Hz; absent: not identified).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub natural_frequency_std_hz: Option<f64>,
+    /// Standard deviation of the identified damping ratio (absent: not identified).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub damping_ratio_std: Option<f64>,
+    /// The natural frequency (Hz) and damping ratio the model used at the end, and how many
+    /// times it adopted identified ones (absent: the model does not identify them).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub in_use: Option<InUse>,
+}
+
+/// The f and ξ a model used at the end of a run (`estimator.identified.in_use`).
+#[derive(Debug, Clone, Serialize)]
+pub struct InUse {
+    /// Natural frequency (Hz).
+    pub natural_frequency_hz: f64,
+    /// Damping ratio.
+    pub damping_ratio: f64,
+    /// Adoptions of identified values during the run.
+    pub adoptions: u32,
 }
 
 impl Identified {
-    /// From the plan (the prior), the identified μ and the pipeline's offsets.
-    pub fn of(plan: &ssvr_proto::Plan, mu: Option<f64>, offsets: [f32; 3]) -> Self {
+    /// From the plan (the prior), the identified μ, f and ξ and the pipeline's offsets.
+    pub fn of(
+        plan: &ssvr_proto::Plan,
+        mu: Option<f64>,
+        oscillator: Option<ssvr_proto::model::OscillatorReport>,
+        offsets: [f32; 3],
+    ) -> Self {
         let p = &plan.specimen.structure;
+        let est = oscillator.and_then(|o| o.estimate);
         Self {
-            natural_frequency_hz: p.natural_frequency_hz,
-            damping_ratio: p.damping_ratio,
+            natural_frequency_hz: est.map_or(p.natural_frequency_hz, |e| e.natural_frequency_hz),
+            damping_ratio: est.map_or(p.damping_ratio, |e| e.damping_ratio),
             friction_coefficient: mu.unwrap_or(p.friction_coefficient),
             static_friction_coefficient: plan.specimen.static_friction_coefficient,
             accel_bias_m_s2: offsets.map(f64::from),
+            natural_frequency_std_hz: est.map(|e| e.natural_frequency_std_hz),
+            damping_ratio_std: est.map(|e| e.damping_ratio_std),
+            in_use: oscillator.map(|o| InUse {
+                natural_frequency_hz: o.natural_frequency_hz,
+                damping_ratio: o.damping_ratio,
+                adoptions: o.adoptions,
+            }),
         }
     }
 }

@@ -11,9 +11,11 @@
 
 mod rectangular;
 mod stick_slip;
+mod tuning;
 
 pub use rectangular::RectangularModel;
 pub use stick_slip::{FixedBaseModel, StickSlipF32, StickSlipModel};
+pub use tuning::{OscillatorReport, Tuning};
 
 use crate::channel::CHANNELS;
 use crate::event::Event;
@@ -175,6 +177,11 @@ pub trait Model {
     /// The prediction of an earlier sample revised by later (back-dated) events; `None` when
     /// the model cannot revise (rectangular) or the sample is out of its history.
     fn revised(&self, sample: u64) -> Option<f32>;
+    /// The top oscillator's identified and adopted f and ξ, if the model identifies them
+    /// (the stick-slip and fixed-base models in fuse mode).
+    fn oscillator(&self) -> Option<OscillatorReport> {
+        None
+    }
 }
 
 /// A model chosen at run time (the host picks the firmware's model type from a plan).
@@ -197,6 +204,9 @@ impl<M: Model + ?Sized> Model for std::boxed::Box<M> {
     }
     fn revised(&self, sample: u64) -> Option<f32> {
         (**self).revised(sample)
+    }
+    fn oscillator(&self) -> Option<OscillatorReport> {
+        (**self).oscillator()
     }
 }
 

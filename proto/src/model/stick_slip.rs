@@ -6,7 +6,8 @@
 //! beyond the plan's longest back-dating is clamped to it. A run of samples is predicted with
 //! `update_block` (bit for bit `update` on each sample).
 
-use super::{FromPlan, Model, ModelKind, Pushed};
+use super::tuning::{OscillatorReport, Tuning};
+use super::{FromPlan, Mode, Model, ModelKind, Pushed};
 use crate::channel::{Channel, CHANNELS};
 use crate::event::Event;
 use crate::flags;
@@ -29,6 +30,8 @@ pub struct StickSlipModel<const H: usize, const EVENTS: bool = true> {
     table: [f32; BATCH],
     top: [f32; BATCH],
     pred: [f32; BATCH],
+    /// f and ξ identified and adopted online (fuse mode).
+    tuning: Option<Tuning>,
 }
 
 /// The estimator's inputs of a sample: the table acceleration, and the top acceleration (NaN
@@ -55,7 +58,14 @@ impl<const H: usize, const EVENTS: bool> StickSlipModel<H, EVENTS> {
             table: [0.0; BATCH],
             top: [0.0; BATCH],
             pred: [0.0; BATCH],
+            tuning: None,
         }
+    }
+
+    /// The model identifying f and ξ online and adopting them ([`Tuning`]).
+    pub fn with_tuning(mut self, tuning: Option<Tuning>) -> Self {
+        self.tuning = tuning;
+        self
     }
 
     /// The estimator.
@@ -80,7 +90,11 @@ impl<const H: usize, const EVENTS: bool> FromPlan for StickSlipModel<H, EVENTS> 
         let c = StickSlipCoefficients::from_bits(&plan.coefficients).ok_or(PlanError::Words)?;
         let est = StickSlipF32::<H>::from_coefficients(c, plan.stick_slip, plan.history)
             .map_err(PlanError::Core)?;
-        Ok(Self::new(est, plan.max_age as f32))
+        let tuning = match plan.mode {
+            Mode::Fuse => Tuning::new(plan.specimen.structure, plan.specimen.sample_rate_hz),
+            Mode::Predict => None,
+        };
+        Ok(Self::new(est, plan.max_age as f32).with_tuning(tuning))
     }
 }
 
@@ -112,6 +126,9 @@ impl<const H: usize, const EVENTS: bool> Model for StickSlipModel<H, EVENTS> {
     fn note_inputs(&mut self, i: usize, channels: &[f32; CHANNELS], flags: u8) {
         if let (Some(u), Some(y)) = (self.table.get_mut(i), self.top.get_mut(i)) {
             (*u, *y) = inputs(channels, flags);
+            if let Some(t) = &mut self.tuning {
+                t.push(*y, channels[Channel::BaseAccel.index()]);
+            }
         }
     }
 
@@ -135,6 +152,11 @@ impl<const H: usize, const EVENTS: bool> Model for StickSlipModel<H, EVENTS> {
                 f.prediction = self.est.update(u, y);
             }
         }
+        if let Some(t) = &mut self.tuning {
+            if let Some(c) = t.check(frames.len() as u32) {
+                self.est.retune(c);
+            }
+        }
     }
 
     fn mu_estimate(&self) -> Option<MuEstimate> {
@@ -143,5 +165,9 @@ impl<const H: usize, const EVENTS: bool> Model for StickSlipModel<H, EVENTS> {
 
     fn revised(&self, sample: u64) -> Option<f32> {
         self.est.prediction_at(sample)
+    }
+
+    fn oscillator(&self) -> Option<OscillatorReport> {
+        self.tuning.as_ref().map(Tuning::report)
     }
 }

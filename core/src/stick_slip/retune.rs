@@ -1,0 +1,59 @@
+//! Adopting new coefficients in place ([`StickSlipEstimator::retune`]): an identified natural
+//! frequency or damping ratio, mid-run.
+
+use super::coefficients::StickSlipCoefficients;
+use super::estimator::StickSlipEstimator;
+use super::maps::{power, StuckMap};
+use super::observer::observer_gain;
+use crate::math::{Real, Transcendentals};
+
+/// The identification's n-step sliding maps of `c`, composed in f64 from the per-sample ones:
+/// Φs^n − I and the response to the friction force +g.
+pub(super) fn block_maps<T: Real>(c: &StickSlipCoefficients<T>, n: u32) -> ([T; 4], [T; 2]) {
+    let per_sample = (c.phi_s.map(T::to_f64), c.force_s.map(T::to_f64));
+    let (a, f) = power(&per_sample, n);
+    let g = c.g.to_f64();
+    (
+        a.map(T::from_f64),
+        [T::from_f64(g * f[0]), T::from_f64(g * f[1])],
+    )
+}
+
+impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H> {
+    /// Adopt the coefficients `c` (of the same sample rate and gravity: an identified natural
+    /// frequency or damping ratio) from the next sample on, keeping the μ in use.
+    ///
+    /// The state (ü1, pδ') of every kept sample keeps its top acceleration (what the stuck
+    /// observer and the measurement pin down) and its relative velocity δ' (pδ' scaled by
+    /// p_new/p_old); δ follows from the new p and ξ. A late event then re-simulates the history
+    /// with the new coefficients. The friction identification's sliding episode ends (its
+    /// free and unit-μ parts were propagated with the old maps). A large change (p by more than
+    /// 0.1 %, or 2ξ by more than 10 %) also restarts its least squares from μ̂ with the initial
+    /// information: what the old model biased is dropped, and μ̂ is adopted again once
+    /// `min_blocks` new blocks are in; a small one keeps them (a short window of new blocks
+    /// would scatter μ̂ more than the old model's bias).
+    pub fn retune(&mut self, c: StickSlipCoefficients<T>) {
+        let scale = c.p / self.c.p;
+        let dp = (scale - T::ONE).abs();
+        let dxi = ((c.two_xi - self.c.two_xi) / self.c.two_xi).abs();
+        let large = !(dp <= T::from_f64(1e-3) && dxi <= T::from_f64(0.1));
+        if scale.is_finite() {
+            for s in self.slots.iter_mut() {
+                s.z[1] = s.z[1] * scale;
+            }
+            self.id.z_start[1] = self.id.z_start[1] * scale;
+        }
+        self.c = c;
+        self.gain = observer_gain::<T, M>(&c, self.cfg.observer_bandwidth);
+        self.closed = StuckMap::closed(&c, self.gain);
+        self.open = StuckMap::open(&c);
+        self.gmu = c.g * self.mu_use;
+        self.set_drive();
+        (self.id.block_phi, self.id.block_force) = block_maps(&c, self.cfg.identify_every);
+        self.id.episode = false;
+        if large {
+            let r = &mut self.id.rls;
+            (r.a, r.b, r.n) = (T::ONE, r.mu, 0);
+        }
+    }
+}

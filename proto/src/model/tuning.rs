@@ -1,0 +1,148 @@
+//! The stick-slip model's online tuning: the top oscillator's f and ξ identified from the top
+//! and base accelerometers ([`ssvr_core::oscillator_id`]), and adopted by the estimator
+//! ([`StickSlipEstimator::retune`](ssvr_core::stick_slip::StickSlipEstimator::retune)) once they
+//! are known well enough. Fuse mode only: it reads the top accelerometer.
+//!
+//! **Adoption policy.** Checked every [`CHECK_EVERY`] samples. A new f is adopted when its
+//! relative standard deviation is below [`MAX_REL_STD_F`] and it differs from the f in use by
+//! more than [`MIN_REL_CHANGE_F`] and three standard deviations; ξ likewise (relative standard
+//! deviation below [`MAX_REL_STD_XI`], change above [`MIN_REL_CHANGE_XI`] and 3σ), adopted with
+//! the f of the same check. Estimates outside half to twice the prior's f, or a ξ outside
+//! [0, 0.9], are not adopted (a wrong specimen or bad channels, not an identification). The new
+//! coefficients are computed in f64 by the same code as the plan's (bit for bit the same on the
+//! host and on the M4F).
+
+use ssvr_core::oscillator_id::{OscillatorEstimate, OscillatorIdentifier};
+use ssvr_core::stick_slip::StickSlipCoefficients;
+use ssvr_core::{Structure, StructureParams};
+
+/// Samples between two adoption checks.
+pub const CHECK_EVERY: u32 = 1024;
+/// Largest relative standard deviation of f̂ for adoption.
+pub const MAX_REL_STD_F: f64 = 1e-3;
+/// Smallest relative change of f worth adopting.
+pub const MIN_REL_CHANGE_F: f64 = 1e-3;
+/// Largest relative standard deviation of ξ̂ for adoption.
+pub const MAX_REL_STD_XI: f64 = 0.05;
+/// Smallest relative change of ξ worth adopting.
+pub const MIN_REL_CHANGE_XI: f64 = 0.05;
+/// Forgetting of the identification per sample (a memory of ~10 s at 10 kHz).
+pub const FORGETTING_PER_SAMPLE: f64 = 0.99999;
+
+/// Identification and adoption state.
+#[derive(Debug, Clone)]
+pub struct Tuning {
+    id: OscillatorIdentifier<f32>,
+    /// The prior, with the f and ξ in use.
+    params: StructureParams,
+    prior_f: f64,
+    rate: f64,
+    countdown: u32,
+    adoptions: u32,
+}
+
+impl Tuning {
+    /// Tuning for the prior `params` at `rate` (`None` if the identifier cannot be set up for
+    /// them: a natural frequency above an eighth of the rate).
+    pub fn new(params: StructureParams, rate: f64) -> Option<Self> {
+        let id =
+            OscillatorIdentifier::new(rate, params.natural_frequency_hz, FORGETTING_PER_SAMPLE)
+                .ok()?;
+        Some(Self {
+            id,
+            params,
+            prior_f: params.natural_frequency_hz,
+            rate,
+            countdown: CHECK_EVERY,
+            adoptions: 0,
+        })
+    }
+
+    /// One sample's top and base accelerations (NaN: missing).
+    #[inline(always)]
+    pub fn push(&mut self, top: f32, base: f32) {
+        self.id.push(top, base);
+    }
+
+    /// Count `samples` samples; at a check, the coefficients to adopt, if any.
+    pub fn check(&mut self, samples: u32) -> Option<StickSlipCoefficients<f32>> {
+        if self.countdown > samples {
+            self.countdown -= samples;
+            return None;
+        }
+        self.countdown = CHECK_EVERY;
+        self.adopt()
+    }
+
+    #[inline(never)]
+    fn adopt(&mut self) -> Option<StickSlipCoefficients<f32>> {
+        let e = self.id.estimate()?;
+        let (f, xi) = (e.natural_frequency_hz, e.damping_ratio);
+        let (f_use, xi_use) = (self.params.natural_frequency_hz, self.params.damping_ratio);
+        let plausible = f > 0.5 * self.prior_f && f < 2.0 * self.prior_f;
+        let known_f = e.natural_frequency_std_hz < MAX_REL_STD_F * f;
+        if !(plausible && known_f) {
+            return None;
+        }
+        let df = libm::fabs(f - f_use);
+        let new_f = df > MIN_REL_CHANGE_F * f_use && df > 3.0 * e.natural_frequency_std_hz;
+        let known_xi = (0.0..0.9).contains(&xi) && e.damping_ratio_std < MAX_REL_STD_XI * xi;
+        let dxi = libm::fabs(xi - xi_use);
+        let new_xi =
+            known_xi && dxi > MIN_REL_CHANGE_XI * xi_use && dxi > 3.0 * e.damping_ratio_std;
+        if !(new_f || new_xi) {
+            return None;
+        }
+        let mut params = self.params;
+        params.natural_frequency_hz = f;
+        if known_xi {
+            params.damping_ratio = xi;
+        }
+        let c = Structure::new(params)
+            .and_then(|s| StickSlipCoefficients::<f32>::new(&s, self.rate))
+            .ok()?;
+        self.params = params;
+        self.adoptions = self.adoptions.saturating_add(1);
+        Some(c)
+    }
+
+    /// The identifier's estimate.
+    pub fn estimate(&self) -> Option<OscillatorEstimate> {
+        self.id.estimate()
+    }
+
+    /// The f (Hz) and ξ in use, and how many times they were adopted.
+    pub fn in_use(&self) -> (f64, f64, u32) {
+        (
+            self.params.natural_frequency_hz,
+            self.params.damping_ratio,
+            self.adoptions,
+        )
+    }
+}
+
+/// What the model reports of its tuning.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OscillatorReport {
+    /// The identifier's estimate (`None` before it has one).
+    pub estimate: Option<OscillatorEstimate>,
+    /// The natural frequency in use (Hz).
+    pub natural_frequency_hz: f64,
+    /// The damping ratio in use.
+    pub damping_ratio: f64,
+    /// Adoptions so far.
+    pub adoptions: u32,
+}
+
+impl Tuning {
+    /// The report of [`Model::oscillator`](super::Model::oscillator).
+    pub fn report(&self) -> OscillatorReport {
+        let (f, xi, n) = self.in_use();
+        OscillatorReport {
+            estimate: self.estimate(),
+            natural_frequency_hz: f,
+            damping_ratio: xi,
+            adoptions: n,
+        }
+    }
+}
