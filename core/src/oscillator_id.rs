@@ -15,7 +15,7 @@
 //! differences: Φ1 = ξ3 − ξ4, Φ2 = ξ2 − 2ξ3 + ξ4, Y = ξ1 − 3ξ2 + 3ξ3 − ξ4 (of A's chain).
 //!
 //! **Discretisation.** The accelerations are averaged over blocks of `decimation` samples
-//! (~1 kHz) and the chains advance exactly (matrix exponential of the Jordan block, computed in
+//! (~500 Hz) and the chains advance exactly (matrix exponential of the Jordan block, computed in
 //! f64 at construction) with the block average held over the block. Both sides see the same
 //! operator, so the relation holds up to the aliasing of what lies above the decimated Nyquist
 //! frequency (the structure's motion lies far below it).
@@ -24,7 +24,7 @@
 //! block (normal equations S·θ = c, solved each block: one division), the a-priori residual's
 //! mean square tracked alongside. The standard deviations are the formal ones, σ²·S⁻¹, inflated
 //! by √(blocks per filter time constant) for the correlation the filters put between blocks.
-//! A sample whose top or base acceleration is missing (NaN) repeats the last valid pair.
+//! A sample flagged missing or saturated repeats the last valid pair.
 
 use crate::error::{check, Error, Param};
 use crate::math::Real;
@@ -54,6 +54,8 @@ pub struct OscillatorIdentifier<T> {
     sum_a: T,
     sum_r: T,
     last: (T, T),
+    /// The last finite block averages.
+    last_block: (T, T),
     /// Chain maps: ξ ← E·(Σ taylor terms)·ξ + gamma·u; `phi[d]` = e^{−λh}(λh)^d/d!.
     phi: [T; N],
     gamma: [T; N],
@@ -81,7 +83,7 @@ pub struct OscillatorIdentifier<T> {
 /// Length of the filter chains.
 const N: usize = 5;
 /// Decimated rate the identifier aims at (Hz).
-const DECIMATED_RATE_HZ: f64 = 1000.0;
+const DECIMATED_RATE_HZ: f64 = 500.0;
 /// Largest decimation (samples per block).
 pub const MAX_DECIMATION: u32 = 64;
 
@@ -139,7 +141,7 @@ impl<T: Real> OscillatorIdentifier<T> {
                     sum += t / (k + m as f64);
                     t *= -x / (m as f64 + 1.0);
                 }
-                *g = libm::pow(x, k) / fact * sum;
+                *g = powi(x, k1 as u32 + 1) / fact * sum;
             } else {
                 // 1 − e^{−x} Σ_{j<k} x^j/j!
                 let (mut sum, mut t) = (0.0, 1.0);
@@ -157,6 +159,7 @@ impl<T: Real> OscillatorIdentifier<T> {
             sum_a: T::ZERO,
             sum_r: T::ZERO,
             last: (T::ZERO, T::ZERO),
+            last_block: (T::ZERO, T::ZERO),
             phi: phi.map(T::from_f64),
             gamma: gamma.map(T::from_f64),
             inv_n: T::from_f64(1.0 / d),
@@ -164,7 +167,7 @@ impl<T: Real> OscillatorIdentifier<T> {
             xr: [T::ZERO; N],
             s: [T::ZERO; 3],
             c: [T::ZERO; 2],
-            rho: T::from_f64(libm::pow(forgetting, d)),
+            rho: T::from_f64(powi(forgetting, decimation)),
             theta: [T::ONE, T::ZERO],
             e2: T::ZERO,
             alpha: T::from_f64(libm::fmin(1.0, 1.0 / (5.0 * blocks_per_tau))),
@@ -184,13 +187,13 @@ impl<T: Real> OscillatorIdentifier<T> {
         self.decimation
     }
 
-    /// One sample: the top acceleration and the base acceleration (NaN: missing; the last valid
-    /// pair is repeated).
+    /// One sample: the top and base accelerations, `valid` false when the sample is missing or
+    /// saturated (the last valid pair is then repeated; a block whose average is not finite
+    /// repeats the previous block's).
     #[inline(always)]
-    pub fn push(&mut self, top: T, base: T) {
-        let r = top - base;
-        if top.is_finite() && r.is_finite() {
-            self.last = (top, r);
+    pub fn push(&mut self, top: T, base: T, valid: bool) {
+        if valid {
+            self.last = (top, top - base);
         }
         self.sum_a += self.last.0;
         self.sum_r += self.last.1;
@@ -200,10 +203,39 @@ impl<T: Real> OscillatorIdentifier<T> {
         }
     }
 
+    /// A run of samples: the top and base accelerations, a sample whose top or base is not
+    /// finite being missing (as [`Self::push`] with `valid` false). The same results as
+    /// [`Self::push`] on each sample; the firmware's batches use it (fewer loads and stores).
+    #[inline(always)]
+    pub fn push_run(&mut self, top: &[T], base: &[T]) {
+        let (mut sa, mut sr, mut last, mut count) = (self.sum_a, self.sum_r, self.last, self.count);
+        for (&y, &b) in top.iter().zip(base) {
+            let r = y - b;
+            if r.is_finite() {
+                last = (y, r);
+            }
+            sa += last.0;
+            sr += last.1;
+            count += 1;
+            if count >= self.decimation {
+                (self.sum_a, self.sum_r, self.last, self.count) = (sa, sr, last, count);
+                self.block();
+                (sa, sr, last, count) = (self.sum_a, self.sum_r, self.last, self.count);
+            }
+        }
+        (self.sum_a, self.sum_r, self.last, self.count) = (sa, sr, last, count);
+    }
+
     #[inline(never)]
     fn block(&mut self) {
-        let (ua, ur) = (self.sum_a * self.inv_n, self.sum_r * self.inv_n);
+        let (mut ua, mut ur) = (self.sum_a * self.inv_n, self.sum_r * self.inv_n);
         (self.sum_a, self.sum_r, self.count) = (T::ZERO, T::ZERO, 0);
+        if ua.is_finite() && ur.is_finite() {
+            self.last_block = (ua, ur);
+        } else {
+            (ua, ur) = self.last_block;
+            self.last = self.last_block;
+        }
         if self.blocks == 0 && self.started == 0 {
             // The first block: the chains in the steady state of its values.
             (self.xa, self.xr) = ([ua; N], [ur; N]);
@@ -274,6 +306,11 @@ impl<T: Real> OscillatorIdentifier<T> {
             blocks: self.blocks,
         })
     }
+}
+
+/// `x^n` by repeated multiplication (n is small; no `pow` in the firmware image).
+fn powi(x: f64, n: u32) -> f64 {
+    (0..n).fold(1.0, |acc, _| acc * x)
 }
 
 /// One block of the scaled chain: ξ ← Φ·ξ + γ·u (Φ lower-triangular Toeplitz).

@@ -29,6 +29,8 @@ pub struct StickSlipModel<const H: usize, const EVENTS: bool = true> {
     max_age: f32,
     table: [f32; BATCH],
     top: [f32; BATCH],
+    /// The base acceleration (for the tuning).
+    base: [f32; BATCH],
     pred: [f32; BATCH],
     /// f and ξ identified and adopted online (fuse mode).
     tuning: Option<Tuning>,
@@ -57,6 +59,7 @@ impl<const H: usize, const EVENTS: bool> StickSlipModel<H, EVENTS> {
             max_age,
             table: [0.0; BATCH],
             top: [0.0; BATCH],
+            base: [0.0; BATCH],
             pred: [0.0; BATCH],
             tuning: None,
         }
@@ -126,8 +129,8 @@ impl<const H: usize, const EVENTS: bool> Model for StickSlipModel<H, EVENTS> {
     fn note_inputs(&mut self, i: usize, channels: &[f32; CHANNELS], flags: u8) {
         if let (Some(u), Some(y)) = (self.table.get_mut(i), self.top.get_mut(i)) {
             (*u, *y) = inputs(channels, flags);
-            if let Some(t) = &mut self.tuning {
-                t.push(*y, channels[Channel::BaseAccel.index()]);
+            if let Some(b) = self.base.get_mut(i) {
+                *b = channels[Channel::BaseAccel.index()];
             }
         }
     }
@@ -152,7 +155,8 @@ impl<const H: usize, const EVENTS: bool> Model for StickSlipModel<H, EVENTS> {
                 f.prediction = self.est.update(u, y);
             }
         }
-        if let Some(t) = &mut self.tuning {
+        if let (Some(t), Some(base)) = (&mut self.tuning, self.base.get(from..to)) {
+            t.push_run(top, base);
             if let Some(c) = t.check(frames.len() as u32) {
                 self.est.retune(c);
             }

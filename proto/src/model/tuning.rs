@@ -58,10 +58,10 @@ impl Tuning {
         })
     }
 
-    /// One sample's top and base accelerations (NaN: missing).
+    /// A run of samples' top and base accelerations (a top NaN: missing or saturated).
     #[inline(always)]
-    pub fn push(&mut self, top: f32, base: f32) {
-        self.id.push(top, base);
+    pub fn push_run(&mut self, top: &[f32], base: &[f32]) {
+        self.id.push_run(top, base);
     }
 
     /// Count `samples` samples; at a check, the coefficients to adopt, if any.
