@@ -20,16 +20,30 @@ pub struct RobustnessArgs {
     /// Output folder of robustness.json, robustness.md and robustness.png.
     #[arg(long, default_value = "robustness-out")]
     pub out: PathBuf,
+    /// Only the perturbations whose id contains one of these (comma-separated, e.g.
+    /// `mu,f+8%`).
+    #[arg(long, value_delimiter = ',')]
+    pub only: Vec<String>,
+    /// Only this mode (`fuse` or `predict`).
+    #[arg(long, value_parser = crate::model::parse_mode)]
+    pub mode: Option<Mode>,
 }
 
 /// `host-sim robustness`.
 pub fn command(args: RobustnessArgs) -> Result<()> {
     let scenes = scenes(args.quick)?;
-    let (modes, perts) = if args.quick {
+    let (mut modes, mut perts) = if args.quick {
         (vec![Mode::Fuse], quick_perturbations())
     } else {
         (vec![Mode::Fuse, Mode::Predict], perturbations())
     };
+    if let Some(m) = args.mode {
+        modes = vec![m];
+    }
+    if !args.only.is_empty() {
+        // The unperturbed row stays: the event goal of the offset rows compares with it.
+        perts.retain(|p| p.id == "none" || args.only.iter().any(|o| p.id.contains(o.as_str())));
+    }
     let progress = std::io::stderr().is_terminal();
     let rows = scorecard(&scenes, &modes, &perts, progress)?;
     let dir = &args.out;
