@@ -492,9 +492,9 @@ fn stick_slip_scenes_prediction_and_friction() {
 fn stick_slip_hard_cases() {
     // (name, m2, ξ, rate, μs, accel noise, measured RMS %, bound %)
     let cases = [
-        ("undamped", 1.75, 0.0, 10_000.0, 0.2, 5e-3, 0.067, 0.2),
-        ("light base", 0.001, 0.05, 10_000.0, 0.2, 5e-3, 0.099, 0.3),
-        ("1 kHz, μs > μ", 1.75, 0.05, 1_000.0, 0.25, 5e-3, 0.92, 2.0),
+        ("undamped", 1.75, 0.0, 10_000.0, 0.2, 5e-3, 0.091, 0.2),
+        ("light base", 0.001, 0.05, 10_000.0, 0.2, 5e-3, 0.148, 0.3),
+        ("1 kHz, μs > μ", 1.75, 0.05, 1_000.0, 0.25, 5e-3, 0.94, 2.0),
         (
             "noisy accelerometers",
             1.75,
@@ -502,7 +502,7 @@ fn stick_slip_hard_cases() {
             10_000.0,
             0.2,
             0.2,
-            0.65,
+            1.24,
             1.5,
         ),
     ];
@@ -531,8 +531,10 @@ fn stick_slip_hard_cases() {
         let mu = e["mu_estimate"].as_f64().unwrap();
         println!("{name}: rms {rms} % of the peak, mu {mu}");
         assert!(rms < bound, "{name}: rms {rms} % (bound {bound} %)");
-        // μ̂ within 0.1 % (identification blocks of ~3.2 ms: 3 samples at 1 kHz). Measured:
-        // 4.9e-5, 5.4e-5, 1.7e-4 and 3.4e-4 relative (noisy accelerometers).
-        assert!((mu / 0.2 - 1.0).abs() < 1e-3, "{name}: mu {mu}");
+        // μ̂ within 0.5 % (identification blocks of ~3.2 ms: 3 samples at 1 kHz). Measured
+        // with μ̂ adopted mid-episode and the sliding observer: 1.3e-3 (undamped: no damping
+        // forgets the episode's start state), 2.8e-5, 1.3e-3 and 3.3e-3 relative (noisy
+        // accelerometers: 40 times the default noise).
+        assert!((mu / 0.2 - 1.0).abs() < 5e-3, "{name}: mu {mu}");
     }
 }

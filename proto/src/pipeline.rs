@@ -173,6 +173,9 @@ impl<M: Model, D: EventDetector> Pipeline<M, D> {
         let mut channels = s.channels;
         self.zeroing.apply(self.index, &mut channels, f);
         let detected = self.detector.process(D::INPUT.of(&channels, f));
+        // The base accelerometer's offset against the table's, tracked by the detector while the
+        // base sticks: the models read the base corrected by it.
+        channels[Channel::BaseAccel.index()] -= self.detector.offset();
         let event = match self.source {
             EventSource::Detector => detected.as_ref().map(Event::from_detector),
             EventSource::Log => s.reversal.map(|r| Event {

@@ -2,7 +2,7 @@
 //! the steady-state runs kept in registers.
 
 use super::estimator::{unlikely, Slot, StickSlipEstimator};
-use super::maps::{sliding_map, stuck_map};
+use super::maps::{slide_map, stuck_map};
 use crate::error::{Error, Param};
 use crate::math::{Real, Transcendentals};
 
@@ -49,8 +49,8 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
     /// The steady-state run at the start of a block ([`Self::update_block`]): plain sliding or
     /// plain stuck samples up to the next mark (whose work, [`Self::at_mark`], it then does).
     /// Returns how many samples it processed (0: the next one takes [`Self::update`]). The inputs are not tested sample by sample: a
-    /// non-finite one (table acceleration; or the measured top acceleration while stuck, which
-    /// enters the map) makes the run's sum of table accelerations or its final state
+    /// non-finite one (table acceleration; or the measured top acceleration, which enters the
+    /// maps through the observer) makes the run's sum of table accelerations or its final state
     /// non-finite, and the run is then redone sample by sample by [`Self::update`].
     #[inline(always)]
     pub(super) fn run(&mut self, table: &[T], top: &[T], out: &mut [T]) -> usize {
@@ -66,7 +66,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
         }
         // `until` = mark − 2: the run may store up to slot mark − 1, then the mark's work.
         let m = (until + 1 - at).min(table.len());
-        let (a, drive, closed) = (self.c.phi_s, self.drive, self.closed);
+        let (slide, drive, closed) = (self.slide, self.drive, self.closed);
         let Some((prev, run)) = self
             .slots
             .get_mut(at..=at + m)
@@ -79,14 +79,15 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
             .zip(table.iter().zip(top))
             .zip(out.iter_mut());
         let finite = if sliding {
-            let (mut z, mut sum) = (prev.z, T::ZERO);
+            let (mut z, mut y0, mut sum) = (prev.z, prev.y, T::ZERO);
             for ((s, (&u, &y)), o) in samples {
-                z = sliding_map(&a, drive, z);
+                z = slide_map(&slide, drive, z, y0);
                 *s = Slot { u, y, z };
                 *o = z[0];
                 sum += u;
+                y0 = y;
             }
-            sum.is_finite()
+            sum.is_finite() && z[0].is_finite() && z[1].is_finite()
         } else {
             let Slot {
                 u: mut u0,

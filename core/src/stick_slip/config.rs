@@ -1,5 +1,8 @@
 //! The estimator's settings ([`StickSlipConfig`]) and the history and storage that suit them.
 
+/// Sliding samples identified before μ̂ is adopted ([`StickSlipConfig::for_rate`]).
+pub const MIN_SAMPLES: u32 = 128;
+
 /// Largest [`StickSlipConfig::identify_every`].
 pub const MAX_IDENTIFY_EVERY: u32 = 32;
 
@@ -29,6 +32,13 @@ pub struct StickSlipConfig {
     /// errors that switching between the sliding and the stuck dynamics at given times pumps up
     /// (undamped structures: ~20/s).
     pub observer_bandwidth: f64,
+    /// Identify μ from the measured base acceleration instead of the top one: the
+    /// `measured_top` argument of [`update`](super::StickSlipEstimator::update) then carries the
+    /// base accelerometer (the predict mode, which never reads the top accelerometer; set
+    /// `observer_bandwidth` to 0 with it). While sliding, m1·ü1 + m2·ü2 is the friction force
+    /// on the whole structure, so ü2 = ±M·g·μ − (M − 1)·ü1 (M = 1 + m1/m2) is linear in μ too,
+    /// with the large lever M·g: the prior's masses scale μ̂ by M_true/M.
+    pub mu_from_base: bool,
 }
 
 impl StickSlipConfig {
@@ -42,6 +52,7 @@ impl StickSlipConfig {
         min_blocks: 64,
         identify_every: 32,
         observer_bandwidth: 2.0,
+        mu_from_base: false,
     };
 }
 
@@ -59,7 +70,7 @@ impl StickSlipConfig {
         };
         Self {
             identify_every: n,
-            min_blocks: 2048u32.div_ceil(n),
+            min_blocks: MIN_SAMPLES.div_ceil(n),
             ..self
         }
     }

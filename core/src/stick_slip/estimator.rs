@@ -3,8 +3,8 @@
 use super::coefficients::StickSlipCoefficients;
 use super::config::{StickSlipConfig, MAX_IDENTIFY_EVERY};
 use super::identify::{Ident, Pending};
-use super::maps::{powi, StuckMap};
-use super::observer::observer_gain;
+use super::maps::{powi, SlideMap, StuckMap};
+use super::observer::{observer_gain, sliding_observer_gain};
 use super::packed::{self, MAX_SWITCHES};
 use super::phase::{Level, SlidingPhase};
 use super::retune::block_maps;
@@ -56,6 +56,15 @@ pub struct StickSlipEstimator<T: Real, M: Transcendentals<T>, const H: usize> {
     pub(super) drive: [T; 2],
     /// Measurement correction of a stuck sample: the state += `gain`·(prediction − measured).
     pub(super) gain: [T; 2],
+    /// The same of a sliding sample.
+    pub(super) slide_gain: [T; 2],
+    /// The sliding interval's map with the correction (a finite measured top acceleration at
+    /// its start; without: `c.phi_s` and `drive`).
+    pub(super) slide: SlideMap<T>,
+    /// The sliding observer's gain and map, wide (until μ̂ is adopted) and narrow.
+    pub(super) slides: [([T; 2], SlideMap<T>); 2],
+    /// The narrow one is in use.
+    pub(super) slide_narrow: bool,
     /// The stuck interval's map with the correction (a finite measured top acceleration at its
     /// start) and without.
     pub(super) closed: StuckMap<T>,
@@ -97,6 +106,17 @@ pub struct StickSlipEstimator<T: Real, M: Transcendentals<T>, const H: usize> {
     /// Their switch fractions (the first `packed::switches(iv)` are valid).
     pub(super) fr: [[T; MAX_SWITCHES]; H],
     pub(super) _m: PhantomData<M>,
+}
+
+/// The sliding observer's gain and map, wide and narrow.
+pub(super) fn sliding_observers<T: Real, M: Transcendentals<T>>(
+    c: &StickSlipCoefficients<T>,
+    b: f64,
+) -> [([T; 2], SlideMap<T>); 2] {
+    [true, false].map(|wide| {
+        let g = sliding_observer_gain::<T, M>(c, b, wide);
+        (g, SlideMap::closed(c, g))
+    })
 }
 
 /// Never called: marks the branch that calls it as unlikely.
@@ -168,6 +188,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
             "observer bandwidth in [0, 10] × p",
         )?;
         let gain = observer_gain::<T, M>(&c, cfg.observer_bandwidth);
+        let slides = sliding_observers::<T, M>(&c, cfg.observer_bandwidth);
         let n = cfg.identify_every;
         let (block_phi, block_force) = block_maps(&c, n);
         let alpha = if n == 1 {
@@ -201,6 +222,10 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
             stuck_until: 0,
             drive: [T::ZERO; 2],
             gain,
+            slide_gain: slides[0].0,
+            slide: slides[0].1,
+            slides,
+            slide_narrow: false,
             closed: StuckMap::closed(&c, gain),
             open: StuckMap::open(&c),
             c,

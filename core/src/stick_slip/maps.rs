@@ -82,6 +82,62 @@ impl<T: Real> StuckMap<T> {
     }
 }
 
+/// The sliding map with the observer's correction z += G·(z0 − y0) at the interval's start:
+/// z ↦ z + A'·z + h·y0 + d with A' = A + ΦsG·e0ᵀ, h = −ΦsG (composed in f64, as
+/// [`StuckMap::closed`]); the forcing d is the open map's.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct SlideMap<T> {
+    pub(super) a: [T; 4],
+    pub(super) h: [T; 2],
+}
+
+impl<T: Real> SlideMap<T> {
+    /// The closed sliding map of `c` for the sliding observer's gain `g`.
+    pub(super) fn closed(c: &StickSlipCoefficients<T>, g: [T; 2]) -> Self {
+        let a = c.phi_s.map(T::to_f64);
+        let g = g.map(T::to_f64);
+        let pg = [
+            g[0] + (a[0] * g[0] + a[1] * g[1]),
+            g[1] + (a[2] * g[0] + a[3] * g[1]),
+        ];
+        Self {
+            a: [
+                T::from_f64(a[0] + pg[0]),
+                c.phi_s[1],
+                T::from_f64(a[2] + pg[1]),
+                c.phi_s[3],
+            ],
+            h: [T::from_f64(-pg[0]), T::from_f64(-pg[1])],
+        }
+    }
+}
+
+/// The closed sliding map ([`SlideMap`]) from the state `z` of the interval's first sample and
+/// its measured top acceleration `y0`, forcing `d`.
+#[inline(always)]
+pub(super) fn slide_map<T: Real>(m: &SlideMap<T>, d: [T; 2], z: [T; 2], y0: T) -> [T; 2] {
+    [
+        z[0] + (d[0] + m.a[0] * z[0] + m.a[1] * z[1] + m.h[0] * y0),
+        z[1] + (d[1] + m.a[2] * z[0] + m.a[3] * z[1] + m.h[1] * y0),
+    ]
+}
+
+/// [`slide_map`] if `y0` is finite, else the open sliding map (`a` = Φs − I).
+#[inline(always)]
+pub(super) fn slide_step<T: Real>(
+    closed: &SlideMap<T>,
+    a: &[T; 4],
+    d: [T; 2],
+    z: [T; 2],
+    y0: T,
+) -> [T; 2] {
+    if y0.is_finite() {
+        slide_map(closed, d, z, y0)
+    } else {
+        sliding_map(a, d, z)
+    }
+}
+
 /// The sliding map over one whole interval: increment map `a` (Φs − I), forcing `d`.
 #[inline(always)]
 pub(super) fn sliding_map<T: Real>(a: &[T; 4], d: [T; 2], z: [T; 2]) -> [T; 2] {

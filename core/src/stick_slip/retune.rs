@@ -2,6 +2,7 @@
 //! frequency or damping ratio, mid-run.
 
 use super::coefficients::StickSlipCoefficients;
+use super::estimator::sliding_observers;
 use super::estimator::StickSlipEstimator;
 use super::maps::{power, StuckMap};
 use super::observer::observer_gain;
@@ -46,6 +47,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
         self.c = c;
         self.gain = observer_gain::<T, M>(&c, self.cfg.observer_bandwidth);
         self.closed = StuckMap::closed(&c, self.gain);
+        self.slides = sliding_observers::<T, M>(&c, self.cfg.observer_bandwidth);
         self.open = StuckMap::open(&c);
         self.gmu = c.g * self.mu_use;
         self.set_drive();
@@ -55,5 +57,8 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
             let r = &mut self.id.rls;
             (r.a, r.b, r.n) = (T::ONE, r.mu, 0);
         }
+        // The wide sliding observer until μ̂ is adopted again after a large change.
+        self.slide_narrow &= !large;
+        (self.slide_gain, self.slide) = self.slides[usize::from(self.slide_narrow)];
     }
 }

@@ -2,7 +2,7 @@
 //! through the phase changes inside it.
 
 use super::estimator::StickSlipEstimator;
-use super::maps::{mat, sliding_map, stuck_step};
+use super::maps::{mat, slide_step, stuck_step};
 use super::observer::correct;
 use super::packed::{self, MAX_SWITCHES};
 use super::phase::Level;
@@ -71,11 +71,13 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
         stuck_step(&self.closed, &self.open, z, y0, u0, u1)
     }
 
-    /// The sliding map over one whole interval with the friction force `f` = ±g·μ.
+    /// The sliding map over one whole interval with the friction force `f` = ±g·μ, from the
+    /// state `z` of its first sample and that sample's measured top acceleration `y0` (the
+    /// observer's correction if finite).
     #[inline(always)]
-    pub(super) fn step_sliding(&self, z: [T; 2], f: T) -> [T; 2] {
+    pub(super) fn step_sliding(&self, z: [T; 2], f: T, y0: T) -> [T; 2] {
         let d = [f * self.c.force_s[0], f * self.c.force_s[1]];
-        sliding_map(&self.c.phi_s, d, z)
+        slide_step(&self.slide, &self.c.phi_s, d, z, y0)
     }
 
     /// State at the end of an interval (phases `iv`, switch fractions `fr`) from its start, the
@@ -91,19 +93,20 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
         (mu, gmu): (T, T),
     ) -> [T; 2] {
         if packed::switches(iv) != 0 {
-            // A stuck start: from the corrected state.
-            let z = if iv & 3 == 0 {
-                correct(self.gain, z, y0)
+            // From the state corrected with the gain of the phase the interval starts in.
+            let gain = if iv & 3 == 0 {
+                self.gain
             } else {
-                z
+                self.slide_gain
             };
+            let z = correct(gain, z, y0);
             return self.step_switched(z, (u0, u1), iv, fr, mu);
         }
         match iv & 3 {
             0 => self.step_stuck(z, y0, u0, u1),
             // (±1·g)·μ = ±(g·μ) exactly.
-            1 => self.step_sliding(z, gmu),
-            _ => self.step_sliding(z, -gmu),
+            1 => self.step_sliding(z, gmu, y0),
+            _ => self.step_sliding(z, -gmu, y0),
         }
     }
 }

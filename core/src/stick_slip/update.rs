@@ -2,7 +2,7 @@
 //! general one, and the mode that selects them.
 
 use super::estimator::{unlikely, Mode, Slot, StickSlipEstimator};
-use super::maps::{sliding_map, stuck_step};
+use super::maps::{slide_step, stuck_step};
 use super::packed::{self, MAX_SWITCHES};
 use crate::math::{Real, Transcendentals};
 
@@ -21,7 +21,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
             if let (Some([prev, cur, ..]), true) =
                 (self.slots.get_mut(at..), table_accel.is_finite())
             {
-                let z = sliding_map(&self.c.phi_s, self.drive, prev.z);
+                let z = slide_step(&self.slide, &self.c.phi_s, self.drive, prev.z, prev.y);
                 *cur = Slot {
                     u: table_accel,
                     y: measured_top,
@@ -95,7 +95,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
             if let (Some([prev, cur, ..]), true) =
                 (self.slots.get_mut(at..), table_accel.is_finite())
             {
-                let z = sliding_map(&self.c.phi_s, self.drive, prev.z);
+                let z = slide_step(&self.slide, &self.c.phi_s, self.drive, prev.z, prev.y);
                 *cur = Slot {
                     u: table_accel,
                     y: measured_top,
