@@ -39,11 +39,12 @@ pub struct InstructionCounts {
     /// Stick-slip and fixed-base models: instructions per stuck sample in blocks.
     pub instructions_per_sample_stuck_in_blocks: Option<f64>,
     /// Instructions per steady-state stuck sample of the plan's model as the pipeline runs it
-    /// (`icount model`): `note_inputs` on each sample of a batch of [`Self::block_size`], then
+    /// (`icount model`): `note_inputs` on each sample of a batch of `ssvr_proto::BATCH`, then
     /// `predict_run` on the batch (the estimator's `update_block` and, in fuse mode, the
     /// identification of f and ξ and its adoption checks), the input generator removed.
     pub model_instructions_per_sample_stuck: Option<f64>,
-    /// The same, sliding after one slip start (μ identified); `None` for the fixed-base model.
+    /// The same, sliding after one slip start (stick-slip: μ identified; rectangular: level +1);
+    /// `None` for the fixed-base model (it pushes no event).
     pub model_instructions_per_sample_sliding: Option<f64>,
     /// Whether the model timed identifies f and ξ (`icount model tuning`: fuse mode, stick-slip
     /// and fixed-base models).
