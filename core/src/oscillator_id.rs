@@ -205,10 +205,62 @@ impl<T: Real> OscillatorIdentifier<T> {
 
     /// A run of samples: the top and base accelerations, a sample whose top or base is not
     /// finite being missing (as [`Self::push`] with `valid` false). The same results as
-    /// [`Self::push`] on each sample; the firmware's batches use it (fewer loads and stores).
+    /// [`Self::push`] on each sample, bit for bit; the firmware's batches use it: the run is
+    /// taken in parts up to the end of each block ([`Self::push_part`]).
     #[inline(always)]
     pub fn push_run(&mut self, top: &[T], base: &[T]) {
-        let (mut sa, mut sr, mut last, mut count) = (self.sum_a, self.sum_r, self.last, self.count);
+        let (mut top, mut base) = (top, base);
+        loop {
+            // (`count` < `decimation` between calls: a full block is processed at once.)
+            let room = self.decimation.saturating_sub(self.count).max(1) as usize;
+            let n = room.min(top.len()).min(base.len());
+            let (Some((t, t_rest)), Some((b, b_rest))) =
+                (top.split_at_checked(n), base.split_at_checked(n))
+            else {
+                return;
+            };
+            if n == 0 {
+                return;
+            }
+            self.push_part(t, b);
+            if self.count < self.decimation {
+                // The block is not full: the run is done.
+                return;
+            }
+            self.block();
+            (top, base) = (t_rest, b_rest);
+        }
+    }
+
+    /// Samples of one block (as many tops as bases): summed without testing each sample, then
+    /// the relative accelerations' sum tested once. If it is finite, every sample was (an
+    /// infinite or NaN term leaves the sum infinite or NaN), so each was valid and the sums are
+    /// those of [`Self::push`], same additions in the same order; otherwise (a missing sample,
+    /// or an overflow) the part is redone sample by sample ([`Self::push_each`]).
+    #[inline(always)]
+    fn push_part(&mut self, top: &[T], base: &[T]) {
+        let (mut sa, mut sr) = (self.sum_a, self.sum_r);
+        for (&y, &b) in top.iter().zip(base) {
+            sa += y;
+            sr += y - b;
+        }
+        if sr.is_finite() {
+            if let (Some(&y), Some(&b)) = (top.last(), base.last()) {
+                self.last = (y, y - b);
+            }
+            (self.sum_a, self.sum_r) = (sa, sr);
+        } else {
+            self.push_each(top, base);
+        }
+        self.count += top.len() as u32;
+    }
+
+    /// [`Self::push`] on each sample of a part (its count aside): a sample whose relative
+    /// acceleration is not finite repeats the last valid pair.
+    #[cold]
+    #[inline(never)]
+    fn push_each(&mut self, top: &[T], base: &[T]) {
+        let (mut sa, mut sr, mut last) = (self.sum_a, self.sum_r, self.last);
         for (&y, &b) in top.iter().zip(base) {
             let r = y - b;
             if r.is_finite() {
@@ -216,14 +268,8 @@ impl<T: Real> OscillatorIdentifier<T> {
             }
             sa += last.0;
             sr += last.1;
-            count += 1;
-            if count >= self.decimation {
-                (self.sum_a, self.sum_r, self.last, self.count) = (sa, sr, last, count);
-                self.block();
-                (sa, sr, last, count) = (self.sum_a, self.sum_r, self.last, self.count);
-            }
         }
-        (self.sum_a, self.sum_r, self.last, self.count) = (sa, sr, last, count);
+        (self.sum_a, self.sum_r, self.last) = (sa, sr, last);
     }
 
     #[inline(never)]

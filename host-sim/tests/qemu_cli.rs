@@ -2,7 +2,8 @@
 //! (1–2 s) and of the El Centro scene (its first 5 s): the firmware's QEMU image built for the
 //! scene and the estimator model, every prediction compared with the host and a full-precision
 //! reference, and the goals (firmware = host to ≤ 1e-6·gμ; board image ≤ 48 KiB flash and
-//! ≤ 8 KiB static RAM; the instruction counts measured).
+//! ≤ 8 KiB static RAM; the instruction counts measured; the model as the pipeline runs it, all
+//! identification on, ≤ 50 instructions per steady sample).
 //!
 //! * the rectangular model (`--model rectangular`): ≤ 20 instructions per steady-state sample,
 //!   the closed form as the reference;
@@ -104,12 +105,27 @@ fn check_common(v: &Value, samples: u64) {
     assert!(num(v, "board_flash_bytes") <= num(&v["goals"], "board_flash_budget_bytes"));
     assert!(num(v, "board_flash_bytes") <= 48.0 * 1024.0);
     assert!(num(v, "board_ram_bytes") <= 8.0 * 1024.0);
+    // The model as the pipeline runs it, all identification on: the firmware's budget of 50
+    // instructions per steady sample (every model).
+    let model = num(v, "instructions_per_steady_sample_model");
+    println!(
+        "{} model as the pipeline runs it: {model:.2} instructions per steady sample (estimator \
+         {:.2})",
+        v["model"],
+        num(v, "instructions_per_steady_sample")
+    );
+    assert!(
+        model.is_finite() && model > 0.0 && model <= 50.0,
+        "model as the pipeline runs it: {model} instructions per steady sample"
+    );
+    assert_eq!(num(v, "model_adoptions"), 0.0, "adoptions while timed");
     for goal in [
         "firmware_equals_host",
         "plan_equals_host",
         "reference_error_le_goal",
         "board_flash_le_budget",
         "board_ram_le_8k",
+        "model_instructions_per_sample_le_50",
     ] {
         assert_eq!(v["goals"][goal], Value::Bool(true), "goal {goal}");
     }
@@ -126,6 +142,15 @@ fn check_rectangular(v: &Value, samples: u64) {
     let ips = num(v, "instructions_per_sample");
     assert!(ips > 5.0 && ips <= 20.0, "instructions per sample {ips}");
     assert!(num(v, "instructions_per_reversal") > 0.0);
+    // The model as the pipeline runs it: the recursion and the run's bookkeeping, no
+    // identification.
+    assert_eq!(v["model_tuning"], Value::Bool(false));
+    let slide = num(v, "instructions_per_sample_model_sliding");
+    let stuck = num(v, "instructions_per_sample_model_stuck");
+    assert_eq!(
+        num(v, "instructions_per_steady_sample_model"),
+        slide.max(stuck)
+    );
     for goal in [
         "instructions_per_sample_le_20",
         "instructions_per_sample_le_goal",
@@ -189,6 +214,17 @@ fn check_stick_slip(v: &Value, samples: u64, mu: f64) {
     assert_eq!(
         v["goals"]["instructions_per_sample_goal"].as_f64(),
         Some(40.0)
+    );
+    // The model as the pipeline runs it (fuse mode: f and ξ identified online): the estimator's
+    // blocks and more.
+    assert_eq!(v["model_tuning"], Value::Bool(true));
+    let model_slide = num(v, "instructions_per_sample_model_sliding");
+    let model_stuck = num(v, "instructions_per_sample_model_stuck");
+    assert!(model_slide > slide, "model sliding {model_slide}");
+    assert!(model_stuck > stuck_blocks, "model stuck {model_stuck}");
+    assert_eq!(
+        num(v, "instructions_per_steady_sample_model"),
+        model_slide.max(model_stuck)
     );
     assert_eq!(
         v["goals"]["instructions_per_sample_le_goal"],

@@ -169,3 +169,67 @@ fn runs_equal_single_pushes() {
     assert_eq!(a.estimate(), b.estimate());
     assert!(a.estimate().is_some());
 }
+
+/// `push_run` in runs of every length from 1 to 45 (within a block, up to its end, across
+/// blocks) leaves the identifier in the very state `push` leaves sample by sample (every field,
+/// bit for bit), with missing samples of every kind among them: a NaN or infinite top, a NaN or
+/// infinite base, both infinite, a run of them, and finite samples so large that the sums
+/// overflow; in f32 and in f64.
+#[test]
+fn runs_leave_the_state_of_single_pushes() {
+    fn check<T: Real + core::fmt::Debug>(top: &[T], base: &[T]) {
+        let mut a = OscillatorIdentifier::<T>::new(1e4, 7.3, 0.99999).unwrap();
+        let mut b = a.clone();
+        let mut k = 0;
+        for n in (1..=45).cycle() {
+            let (Some(t), Some(u)) = (top.get(k..(k + n).min(top.len())), base.get(k..)) else {
+                break;
+            };
+            if t.is_empty() {
+                break;
+            }
+            for (&y, &v) in t.iter().zip(u) {
+                a.push(y, v, (y - v).is_finite());
+            }
+            b.push_run(t, &u[..t.len()]);
+            // Debug shows every field (a float by its shortest round trip: bit for bit, NaN aside).
+            assert_eq!(
+                std::format!("{a:?}"),
+                std::format!("{b:?}"),
+                "after sample {}",
+                k + n
+            );
+            k += n;
+        }
+        assert!(k >= top.len());
+        assert!(a.estimate().is_some());
+        assert_eq!(a.estimate(), b.estimate());
+    }
+    let mut data = record(7.0, 0.05, 10_000.0, 1.0, 0.03, (0.1, 0.0));
+    let inf = f64::INFINITY;
+    for (i, d) in data.iter_mut().enumerate() {
+        match i % 997 {
+            3 => d.0 = f64::NAN,
+            50 => d.1 = f64::NAN,
+            100 => d.0 = -inf,
+            150 => d.1 = inf,
+            200 => *d = (inf, inf),
+            250..=262 => d.0 = f64::NAN,
+            300 => *d = (inf, -inf),
+            _ => {}
+        }
+    }
+    // Finite but so large that a block's sums overflow (f32: 3e38 twice; f64: 1e308 twice).
+    for d in data.iter_mut().skip(5_000).take(2) {
+        d.0 = 3e38;
+    }
+    for d in data.iter_mut().skip(7_000).take(2) {
+        d.0 = 1e308;
+    }
+    let top: std::vec::Vec<f32> = data.iter().map(|d| d.0 as f32).collect();
+    let base: std::vec::Vec<f32> = data.iter().map(|d| d.1 as f32).collect();
+    check(&top, &base);
+    let top: std::vec::Vec<f64> = data.iter().map(|d| d.0).collect();
+    let base: std::vec::Vec<f64> = data.iter().map(|d| d.1).collect();
+    check(&top, &base);
+}

@@ -26,6 +26,13 @@
 //!   (stick-slip and fixed-base models): the estimator's `update_block` on blocks of
 //!   `ssvr_proto::BATCH` samples, as the pipeline runs it: stuck, and sliding with μ identified
 //!   (stick-slip only, else `slide_ticks=0`); `errors` counts refused blocks (none expected);
+//! * `icount model batch=.. updates=.. loop_ticks=.. stuck_ticks=.. slide_ticks=.. errors=.. tuning=.. adoptions=..`:
+//!   the plan's model as the pipeline runs it ([`model_runs`]): `note_inputs` and `predict_run`
+//!   on batches of `ssvr_proto::BATCH` samples of a steady oscillation, all identification on
+//!   (fuse mode: `tuning=true`, f and ξ identified and checked for adoption), stuck and sliding
+//!   after one slip start (fixed-base: `slide_ticks=0`), and the loop alone (generating the
+//!   inputs); `errors` counts a refused slip start, `adoptions` the f and ξ adopted while timed
+//!   (none expected: the steady state);
 //! * `icount detector samples=.. loop_ticks=.. ramp_ticks=.. triangle_ticks=.. reversals=..`:
 //!   the reversal detector on a displacement ramp (sliding, a new extremum every sample: its
 //!   steady state) and on a triangle wave (a reversal every [`TRIANGLE_HALF`] samples), both
@@ -45,6 +52,7 @@
 
 mod detector;
 mod model;
+mod model_runs;
 
 pub use model::BenchModel;
 
@@ -142,9 +150,11 @@ pub fn calibrate(t: &mut Ticks) -> (u32, u32) {
     (instructions, ticks)
 }
 
-/// Time [`UPDATES`] steady-state updates of the compiled-in model and [`REVERSALS`] samples that
-/// each push an event (alternating ±1, age 0.5 samples) before their update; emit raw ticks and
-/// the derived instruction counts; then the detector and the pipeline (`detector::run_detector`).
+/// Time the detector and the pipeline (`detector::run_detector`); [`UPDATES`] steady-state
+/// updates of the compiled-in model and [`REVERSALS`] samples that each push an event
+/// (alternating ±1, age 0.5 samples) before their update; the model as the pipeline runs it, all
+/// identification on (`model_runs::model_runs`); emit raw ticks and the derived instruction
+/// counts.
 /// `model` and `det` should be freshly built from `plan`.
 pub fn run(t: &mut Ticks, plan: &Plan, model: Model, det: Detector) {
     let (cal_instr, cal_ticks) = calibrate(t);
@@ -160,6 +170,7 @@ pub fn run(t: &mut Ticks, plan: &Plan, model: Model, det: Detector) {
         }
     });
     let (update_ticks, reversals, reversal_ticks, errors) = model.estimator_blocks(t, plan);
+    model_runs::model_runs(t, plan, &model);
     defmt::info!(
         "icount raw updates={=u32} update_ticks={=u32} loop_ticks={=u32} reversals={=u32} reversal_ticks={=u32} reversal_errors={=u32}",
         UPDATES,

@@ -94,6 +94,14 @@ impl Message {
         }
     }
 
+    /// A `bool` field.
+    pub fn bool(&self, key: &str) -> Option<bool> {
+        match self.get(key)? {
+            Value::Bool(v) => Some(*v),
+            _ => None,
+        }
+    }
+
     /// Whether the message is `name` (and, if given, `topic`).
     pub fn is(&self, name: &str, topic: Option<&str>) -> bool {
         self.name == name && topic.is_none_or(|t| self.topic == t)

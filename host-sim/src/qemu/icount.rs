@@ -1,5 +1,5 @@
 //! The instruction counts the QEMU image measures after the replay (SysTick under
-//! `-icount shift=0`, `firmware/src/bench.rs`), from its `icount` messages' typed fields.
+//! `-icount shift=0`, `firmware/src/bench/`), from its `icount` messages' typed fields.
 
 use super::decode::Message;
 
@@ -38,6 +38,19 @@ pub struct InstructionCounts {
     pub instructions_per_sample_in_blocks: Option<f64>,
     /// Stick-slip and fixed-base models: instructions per stuck sample in blocks.
     pub instructions_per_sample_stuck_in_blocks: Option<f64>,
+    /// Instructions per steady-state stuck sample of the plan's model as the pipeline runs it
+    /// (`icount model`): `note_inputs` on each sample of a batch of `ssvr_proto::BATCH`, then
+    /// `predict_run` on the batch (the estimator's `update_block` and, in fuse mode, the
+    /// identification of f and ξ and its adoption checks), the input generator removed.
+    pub model_instructions_per_sample_stuck: Option<f64>,
+    /// The same, sliding after one slip start (stick-slip: μ identified; rectangular: level +1);
+    /// `None` for the fixed-base model (it pushes no event).
+    pub model_instructions_per_sample_sliding: Option<f64>,
+    /// Whether the model timed identifies f and ξ (`icount model tuning`: fuse mode, stick-slip
+    /// and fixed-base models).
+    pub model_tuning: Option<bool>,
+    /// Adoptions of f and ξ while the model was timed (0 in the steady state).
+    pub model_adoptions: Option<u32>,
     /// Updates timed in the steady-state block.
     pub updates: u32,
     /// SysTick ticks of the steady-state block.
@@ -123,6 +136,18 @@ pub fn instruction_counts(frames: &[Message]) -> Option<InstructionCounts> {
                 .then(|| (f64::from(ticks) - f64::from(lp)) * ipt / f64::from(n))
         })
     };
+    // The model as the pipeline runs it: the same arithmetic as the estimator's blocks.
+    let mdl = find("model");
+    let model_per_sample = |field: &str| {
+        mdl.and_then(|m| {
+            let n: u32 = m.u32("updates")?;
+            let lp: u32 = m.u32("loop_ticks")?;
+            let ticks: u32 = m.u32(field)?;
+            let errors: u32 = m.u32("errors")?;
+            (n > 0 && ticks > 0 && errors == 0)
+                .then(|| (f64::from(ticks) - f64::from(lp)) * ipt / f64::from(n))
+        })
+    };
     let det = find("detector");
     let pipe = find("pipeline");
     let per = |ticks: u32, n: u32| f64::from(ticks) * ipt / f64::from(n);
@@ -165,6 +190,10 @@ pub fn instruction_counts(frames: &[Message]) -> Option<InstructionCounts> {
         block_size,
         instructions_per_sample_in_blocks: in_blocks("slide_ticks"),
         instructions_per_sample_stuck_in_blocks: in_blocks("stuck_ticks"),
+        model_instructions_per_sample_stuck: model_per_sample("stuck_ticks"),
+        model_instructions_per_sample_sliding: model_per_sample("slide_ticks"),
+        model_tuning: mdl.and_then(|m| m.bool("tuning")),
+        model_adoptions: mdl.and_then(|m| m.u32("adoptions")),
         updates,
         update_ticks,
         loop_ticks,

@@ -1,7 +1,10 @@
 //! What `host-sim qemu` prints: the report for people ([`print_report`]) or as JSON, and the
 //! command itself ([`command`]), which fails unless every goal is met.
 
-use super::check::{run_scene_mode, QemuReport, GOAL_REFERENCE_GMU, HOST_TOLERANCE_GMU};
+use super::check::{
+    run_scene_mode, QemuReport, GOAL_MODEL_INSTRUCTIONS_PER_SAMPLE, GOAL_REFERENCE_GMU,
+    HOST_TOLERANCE_GMU,
+};
 use super::image;
 use crate::model::Model;
 use crate::scene::Scene;
@@ -122,6 +125,23 @@ pub fn print_report(r: &QemuReport, out: &mut impl Write) -> std::io::Result<()>
         opt(r.detector_instructions_per_stick, 0),
         opt(r.pipeline_instructions_per_sample, 1)
     )?;
+    writeln!(
+        out,
+        "  model as the pipeline runs it ({}): {}/sample [goal <= {}: {}] (blocks of {}: {} sliding, {} stuck; {} adoptions while timed)",
+        match r.model_tuning {
+            Some(true) => "all identification on: f and xi identified online",
+            Some(false) => "no identification of f and xi",
+            None => "-",
+        },
+        opt(r.instructions_per_steady_sample_model, 2),
+        GOAL_MODEL_INSTRUCTIONS_PER_SAMPLE,
+        ok(g.model_instructions_per_sample_le_50),
+        r.block_size.unwrap_or(ssvr_proto::BATCH as u32),
+        opt(r.instructions_per_sample_model_sliding, 2),
+        opt(r.instructions_per_sample_model_stuck, 2),
+        r.model_adoptions
+            .map_or_else(|| "-".to_string(), |n| n.to_string())
+    )?;
     let board = match (r.board_flash_bytes, r.board_ram_bytes) {
         (Some(f), Some(m)) => format!(
             "ssvr-board flash {f} B [<= {} KiB: {}], static RAM {m} B [<= 8 KiB: {}]",
@@ -194,6 +214,12 @@ pub fn command(scene: Option<&Path>, json: bool, model: Option<Model>, mode: Mod
             unmet.push(format!(
                 "{:.2} instructions per steady sample > {}",
                 report.instructions_per_steady_sample, g.instructions_per_sample_goal
+            ));
+        }
+        if !g.model_instructions_per_sample_le_50 {
+            unmet.push(format!(
+                "{} instructions per steady sample of the model as the pipeline runs it > {GOAL_MODEL_INSTRUCTIONS_PER_SAMPLE}",
+                opt(report.instructions_per_steady_sample_model, 2)
             ));
         }
         if !g.board_flash_le_budget || !g.board_ram_le_8k {

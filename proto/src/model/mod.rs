@@ -15,7 +15,7 @@ mod tuning;
 
 pub use rectangular::RectangularModel;
 pub use stick_slip::{FixedBaseModel, StickSlipF32, StickSlipModel};
-pub use tuning::{OscillatorReport, Tuning};
+pub use tuning::{OscillatorReport, Tuning, CHECK_EVERY};
 
 use crate::channel::CHANNELS;
 use crate::event::Event;
