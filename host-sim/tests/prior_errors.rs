@@ -43,7 +43,10 @@ fn elcentro() -> Scene {
 /// than over the whole run: 0.061 % and 0.035 % RMS there).
 #[test]
 fn fuse_holds_with_mu_told_25_percent_off() {
-    for (name, scene) in [("default", Scene::default_scene()), ("El Centro", elcentro())] {
+    for (name, scene) in [
+        ("default", Scene::default_scene()),
+        ("El Centro", elcentro()),
+    ] {
         for mu in [1.25, 0.75] {
             let out = go(&told(scene.clone(), 3.0, mu, 1.0, 1.0), Mode::Fuse);
             let e = &out.report.estimator;
