@@ -89,8 +89,8 @@ const GAIN_PRIOR_SAMPLES: f32 = 16.0;
 /// The largest gain mismatch believed (10 %).
 const GAIN_MAX: f32 = 0.1;
 
-/// A table acceleration beyond this (m/s², about 1000 g) is not a measurement: the sample is
-/// unusable.
+/// A table acceleration beyond this (m/s², about 1000 g) is not a measurement: it informs
+/// neither the table's value at rest nor the gain mismatch.
 const REFERENCE_MAX: f32 = 1e4;
 
 /// Detector settings.
@@ -275,20 +275,21 @@ impl<const N: usize> PhaseDetector<N> {
         self.gain
     }
 
-    /// The sample less the offset and the gain mismatch times the table acceleration `reference`,
-    /// and both tracked. The offset: its mean over the first [`BIAS_INIT_SAMPLES`] samples (those
-    /// close to it), then, while stuck with no slip start pending and the corrected sample within
-    /// the threshold, an exponential average at [`BIAS_RATE`] per sample. The gain mismatch, on
-    /// those samples with the table acceleration at least [`GAIN_EXCITATION_THRESHOLDS`]
+    /// The sample `x` (the gain mismatch times the table acceleration `reference`, less its value
+    /// at rest, already removed) less the offset, and both tracked. The offset and the table's
+    /// value at rest: their means over the first [`BIAS_INIT_SAMPLES`] samples (those close to the
+    /// offset); then the offset, while stuck with no slip start pending and the corrected sample
+    /// within the threshold, an exponential average at [`BIAS_RATE`] per sample, and the gain
+    /// mismatch, on those samples with `reference` at least [`GAIN_EXCITATION_THRESHOLDS`]
     /// thresholds: recursive least squares with forgetting ([`GAIN_RATE`] per such sample).
     #[inline(always)]
     fn unbias(&mut self, x: f32, reference: f32) -> f32 {
-        let reference = reference - self.table_zero;
-        let x = x - self.gain * reference;
         let a = x - self.bias;
         let thr = self.cfg.threshold_m_s2;
         if self.k < BIAS_INIT_SAMPLES {
-            if self.bias_n == 0 || libm::fabsf(a) < BIAS_INIT_THRESHOLDS * thr {
+            if libm::fabsf(reference) <= REFERENCE_MAX
+                && (self.bias_n == 0 || libm::fabsf(a) < BIAS_INIT_THRESHOLDS * thr)
+            {
                 self.bias_n += 1;
                 let n = self.bias_n as f32;
                 self.bias += a / n;
@@ -299,11 +300,14 @@ impl<const N: usize> PhaseDetector<N> {
         }
         if self.direction == 0 && self.pending.is_none() && libm::fabsf(a) < thr {
             self.bias += BIAS_RATE * a;
-            // (|reference| ≤ 2·REFERENCE_MAX: the information stays finite and positive.)
             if libm::fabsf(reference) >= GAIN_EXCITATION_THRESHOLDS * thr {
-                let info = (1.0 - GAIN_RATE) * self.gain_info + reference * reference;
-                self.gain_info = info;
-                self.gain = (self.gain + reference * a / info).clamp(-GAIN_MAX, GAIN_MAX);
+                let r2 = reference * reference;
+                // (The information stays finite and positive: the update too, never NaN.)
+                if r2 <= REFERENCE_MAX * REFERENCE_MAX {
+                    let info = (1.0 - GAIN_RATE) * self.gain_info + r2;
+                    self.gain_info = info;
+                    self.gain = (self.gain + reference * a / info).clamp(-GAIN_MAX, GAIN_MAX);
+                }
             }
         }
         a
@@ -322,16 +326,20 @@ impl<const N: usize> PhaseDetector<N> {
 
     /// Process one sample of the slip acceleration, base minus table accelerometer, with the
     /// table accelerometer's sample (m/s²): the gain mismatch is tracked and removed too. A
-    /// non-finite sample, or one whose table acceleration is not finite or beyond 10⁴ m/s²,
-    /// continues the last two linearly.
+    /// non-finite sample, or one whose table acceleration is not finite, continues the last two
+    /// linearly; a table acceleration beyond 10⁴ m/s² does not inform the gain mismatch.
     pub fn process_with_reference(
         &mut self,
         slip_accel: f32,
         table_accel: f32,
     ) -> Option<SlipEvent> {
         let k = self.k;
-        let a = if slip_accel.is_finite() && libm::fabsf(table_accel) <= REFERENCE_MAX {
-            self.unbias(slip_accel, table_accel)
+        // The table acceleration less its value at rest, and the gain mismatch's share of it
+        // removed (a non-finite table acceleration makes the sample non-finite).
+        let reference = table_accel - self.table_zero;
+        let x = slip_accel - self.gain * reference;
+        let a = if x.is_finite() {
+            self.unbias(x, reference)
         } else if k > 1 {
             // A missing sample: s̈ continued linearly (a repeated value would be a kink, which
             // the jump test could take for a change of the friction force).
@@ -1059,8 +1067,9 @@ mod tests {
         );
     }
 
-    /// The gain mismatch's guards: a mismatch beyond 10 % is held at ±0.1; a non-finite or absurd
-    /// table acceleration makes the sample a missing one and never reaches the state; with
+    /// The gain mismatch's guards: a mismatch beyond 10 % is held at ±0.1; a non-finite table
+    /// acceleration makes the sample a missing one, an absurd one informs nothing: neither
+    /// reaches the state (the mismatch within 1e-4 after them, the offset within 1e-3 m/s²); with
     /// `process` nothing is tracked.
     #[test]
     fn gain_mismatch_guards() {
@@ -1078,7 +1087,11 @@ mod tests {
         let mut d = PhaseDetector::<64>::new(cfg).unwrap();
         for i in 0..3_000u32 {
             let t = if i < 20 { 0.0 } else { table(i) };
+            // (A huge finite one is a spike of the corrected sample, rejected as such; during
+            // the first samples it stays out of the table's value at rest.)
             let r = match i % 5 {
+                _ if i == 5 => 1e6,
+                _ if i == 7 => f32::NAN,
                 _ if i < 20 => t,
                 0 => f32::NAN,
                 1 => f32::INFINITY,
