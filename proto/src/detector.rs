@@ -60,11 +60,24 @@ pub trait EventDetector: Sized {
     fn from_plan(plan: &Plan) -> Result<Self, PlanError>;
     /// Process one input sample (NaN: unusable); an event found, back-dated by its age.
     fn process(&mut self, x: f32) -> Option<SlipEvent>;
+    /// [`EventDetector::process`] with the sample's table acceleration (m/s²), which the
+    /// slip-acceleration detector regresses its input on to remove the accelerometers' gain
+    /// mismatch; the displacement detector ignores it.
+    #[inline(always)]
+    fn process_with_reference(&mut self, x: f32, table_accel: f32) -> Option<SlipEvent> {
+        let _ = table_accel;
+        self.process(x)
+    }
     /// The longest back-dating of its events (samples).
     fn max_age_samples(&self) -> usize;
     /// The offset of its input it tracks and removes (the slip acceleration's; 0 for the
     /// displacement, whose offset does not matter to its extrema).
     fn offset(&self) -> f32 {
+        0.0
+    }
+    /// The gain mismatch of its input against the table acceleration it tracks and removes (the
+    /// slip acceleration's; 0 for the displacement).
+    fn gain_mismatch(&self) -> f32 {
         0.0
     }
 }
@@ -108,11 +121,20 @@ impl<const N: usize> EventDetector for PhaseDetector<N> {
         PhaseDetector::process(self, x)
     }
 
+    #[inline(always)]
+    fn process_with_reference(&mut self, x: f32, table_accel: f32) -> Option<SlipEvent> {
+        PhaseDetector::process_with_reference(self, x, table_accel)
+    }
+
     fn max_age_samples(&self) -> usize {
         self.config().max_age_samples()
     }
 
     fn offset(&self) -> f32 {
         PhaseDetector::offset(self)
+    }
+
+    fn gain_mismatch(&self) -> f32 {
+        PhaseDetector::gain_mismatch(self)
     }
 }

@@ -13,8 +13,10 @@
 //!    flagged saturated upstream, or at or beyond the displacement full scale; the
 //!    accelerometers' offsets are removed ([`Zeroing`] on a rest before the input) (a missing
 //!    sample's channels are NaN: the stick-slip estimator holds its last table acceleration);
-//! 2. the detector processes its input ([`crate::DetectorInput::of`]; NaN when unusable);
-//!    its event, or with [`EventSource::Log`] the sample's logged reversal, is the sample's;
+//! 2. the detector processes its input ([`crate::DetectorInput::of`]; NaN when unusable) with the
+//!    table acceleration (the slip-acceleration detector removes the accelerometers' gain
+//!    mismatch against it); its event, or with [`EventSource::Log`] the sample's logged
+//!    reversal, is the sample's;
 //! 3. the event goes to the model ([`Model::push`]) before the sample's prediction: flags
 //!    `EVENT_PUSHED` or `EVENT_REJECTED`;
 //! 4. the model predicts the sample (always, valid or not, to keep time).
@@ -172,7 +174,10 @@ impl<M: Model, D: EventDetector> Pipeline<M, D> {
         }
         let mut channels = s.channels;
         self.zeroing.apply(self.index, &mut channels, f);
-        let detected = self.detector.process(D::INPUT.of(&channels, f));
+        let detected = self.detector.process_with_reference(
+            D::INPUT.of(&channels, f),
+            channels[Channel::TableAccel.index()],
+        );
         // The base accelerometer's offset against the table's, tracked by the detector while the
         // base sticks: the models read the base corrected by it.
         channels[Channel::BaseAccel.index()] -= self.detector.offset();
