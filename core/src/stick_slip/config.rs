@@ -32,13 +32,6 @@ pub struct StickSlipConfig {
     /// errors that switching between the sliding and the stuck dynamics at given times pumps up
     /// (undamped structures: ~20/s).
     pub observer_bandwidth: f64,
-    /// Identify μ from the measured base acceleration instead of the top one: the
-    /// `measured_top` argument of [`update`](super::StickSlipEstimator::update) then carries the
-    /// base accelerometer (the predict mode, which never reads the top accelerometer; set
-    /// `observer_bandwidth` to 0 with it). While sliding, m1·ü1 + m2·ü2 is the friction force
-    /// on the whole structure, so ü2 = ±M·g·μ − (M − 1)·ü1 (M = 1 + m1/m2) is linear in μ too,
-    /// with the large lever M·g: the prior's masses scale μ̂ by M_true/M.
-    pub mu_from_base: bool,
 }
 
 impl StickSlipConfig {
@@ -52,7 +45,6 @@ impl StickSlipConfig {
         min_blocks: 64,
         identify_every: 32,
         observer_bandwidth: 2.0,
-        mu_from_base: false,
     };
 }
 

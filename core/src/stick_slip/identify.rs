@@ -72,32 +72,6 @@ pub(super) struct Ident<T> {
     pub(super) rls: Rls<T>,
 }
 
-/// The identification's regressor and target at a block's last sample (sliding in phase `sign`,
-/// the episode's free part `zh` and unit-μ part `zu` there, the measurement `y`).
-///
-/// From the top accelerometer: ü1 = −(z0 + 2ξ·z1) = w0, so φ = w0 of z_u, the target y − w0 of
-/// z_h. From the base accelerometer (`from_base`): ü2 = sign·M·g·μ − (M − 1)·ü1 (the friction
-/// force sign·μ·(m1 + m2)·g on the structure, whose equilibrium in the sliding map is ü1 =
-/// sign·g·μ), so φ = sign·M·g − (M − 1)·w0 of z_u, the target y + (M − 1)·w0 of z_h.
-#[inline(always)]
-fn regression<T: Real>(
-    c: &super::coefficients::StickSlipCoefficients<T>,
-    from_base: bool,
-    sign: Level,
-    zh: [T; 2],
-    zu: [T; 2],
-    y: T,
-) -> (T, T) {
-    if from_base {
-        let m = c.mp / c.p;
-        let m1 = m - T::ONE;
-        let mg = if sign > 0 { m * c.g } else { -(m * c.g) };
-        (mg - m1 * zu[0], y + m1 * zh[0])
-    } else {
-        (zu[0], y - zh[0])
-    }
-}
-
 impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H> {
     /// An event changed the phases from interval `i` on (`at_start`: all of interval i, else
     /// from a switch inside it): update the pending identification block.
@@ -190,8 +164,9 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
             let zu = [zu[0] + (wu[0] + f[0]), zu[1] + (wu[1] + f[1])];
             id.zh = zh;
             id.zu = zu;
-            let (phi, target) = regression(&self.c, self.cfg.mu_from_base, sign, zh, zu, yd);
-            self.id.rls.update(phi, target);
+            // ü1 = −(z0 + 2ξ·z1) = w0: φ = w0 of z_u, the target y − w0 of z_h.
+            let (phi, target) = (zu[0], yd - zh[0]);
+            id.rls.update(phi, target);
             self.adopt_mu();
         } else {
             self.identify_other(sd);
@@ -248,14 +223,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
                 }
             }
             if yd.is_finite() {
-                // The phase of the block's last interval.
-                let last = id.every.saturating_sub(1);
-                let sign = if b.neg.checked_shr(last as u32).unwrap_or(0) & 1 == 0 {
-                    1
-                } else {
-                    -1
-                };
-                let (phi, target) = regression(c, self.cfg.mu_from_base, sign, id.zh, id.zu, yd);
+                let (phi, target) = (id.zu[0], yd - id.zh[0]);
                 id.rls.update(phi, target);
                 self.adopt_mu();
             }

@@ -34,23 +34,18 @@ pub struct StickSlipModel<const H: usize, const EVENTS: bool = true> {
     pred: [f32; BATCH],
     /// f and ξ identified and adopted online (fuse mode).
     tuning: Option<Tuning>,
-    /// μ identified from the base accelerometer (predict mode): `top` holds the base's.
-    from_base: bool,
 }
 
-/// The estimator's inputs of a sample: the table acceleration, and the measured acceleration
-/// it identifies μ from (NaN when the sample is saturated or missing): the top accelerometer,
-/// or with `from_base` (the predict mode) the base accelerometer.
+/// The estimator's inputs of a sample: the table acceleration, and the top acceleration (NaN
+/// when the sample is saturated or missing).
 #[inline(always)]
-fn inputs(channels: &[f32; CHANNELS], f: u8, from_base: bool) -> (f32, f32) {
-    let y = if f & (flags::SATURATED | flags::MISSING) != 0 {
-        f32::NAN
-    } else if from_base {
-        channels[Channel::BaseAccel.index()]
-    } else {
+fn inputs(channels: &[f32; CHANNELS], f: u8) -> (f32, f32) {
+    let top = if f & (flags::SATURATED | flags::MISSING) == 0 {
         channels[Channel::TopAccel.index()]
+    } else {
+        f32::NAN
     };
-    (channels[Channel::TableAccel.index()], y)
+    (channels[Channel::TableAccel.index()], top)
 }
 
 /// The fixed-base model: the stick-slip estimator held stuck, no event pushed.
@@ -59,7 +54,6 @@ pub type FixedBaseModel<const H: usize> = StickSlipModel<H, false>;
 impl<const H: usize, const EVENTS: bool> StickSlipModel<H, EVENTS> {
     /// The model on an estimator; events older than `max_age` samples are pushed with that age.
     pub fn new(est: StickSlipF32<H>, max_age: f32) -> Self {
-        let from_base = est.config().mu_from_base;
         Self {
             est,
             max_age,
@@ -68,7 +62,6 @@ impl<const H: usize, const EVENTS: bool> StickSlipModel<H, EVENTS> {
             base: [0.0; BATCH],
             pred: [0.0; BATCH],
             tuning: None,
-            from_base,
         }
     }
 
@@ -135,7 +128,7 @@ impl<const H: usize, const EVENTS: bool> Model for StickSlipModel<H, EVENTS> {
     #[inline(always)]
     fn note_inputs(&mut self, i: usize, channels: &[f32; CHANNELS], flags: u8) {
         if let (Some(u), Some(y)) = (self.table.get_mut(i), self.top.get_mut(i)) {
-            (*u, *y) = inputs(channels, flags, self.from_base);
+            (*u, *y) = inputs(channels, flags);
             if let Some(b) = self.base.get_mut(i) {
                 *b = channels[Channel::BaseAccel.index()];
             }
