@@ -149,7 +149,7 @@ pub fn run() -> ! {
     }
 
     // Cost of the estimator and the detector in core clock cycles (SysTick on the core clock),
-    // with feature `bench` only (it does not fit the 32 KiB flash budget otherwise).
+    // with feature `bench` only (a development build: 3–6 KB of flash).
     #[cfg(feature = "bench")]
     if let (Ok(m), Ok(d)) = (plan::model(&plan), plan::detector(&plan)) {
         let mut ticks = bench::Ticks::new(cp.SYST);
@@ -245,7 +245,7 @@ fn TIM2() {
 
 /// Log the panic over RTT and stop at a breakpoint (no data path can panic). The location is
 /// not formatted: `PanicInfo::location` keeps every panic site's file name and the `core::fmt`
-/// machinery in flash (~2.5 KB, over the 32 KiB budget); `probe-rs run` prints the backtrace
+/// machinery in flash (~2.5 KB); `probe-rs run` prints the backtrace
 /// when the core stops at the breakpoint.
 #[panic_handler]
 fn panic(_info: &core::panic::PanicInfo) -> ! {
