@@ -61,25 +61,34 @@ impl<T: Real> StuckMap<T> {
     /// z + A(z + G(z0 − y0)) + G(z0 − y0) + … = z + (A + ΦG·e0ᵀ)z − ΦG·y0 + …, Φ = I + A
     /// (composed in f64).
     pub(super) fn closed(c: &StickSlipCoefficients<T>, g: [T; 2]) -> Self {
-        let open = Self::open(c);
-        let a = c.phi_f.map(T::to_f64);
-        let g = g.map(T::to_f64);
-        // ΦG = G + A·G.
-        let pg = [
-            g[0] + (a[0] * g[0] + a[1] * g[1]),
-            g[1] + (a[2] * g[0] + a[3] * g[1]),
-        ];
+        let (a, h) = close(&c.phi_f, g);
         Self {
-            a: [
-                T::from_f64(a[0] + pg[0]),
-                c.phi_f[1],
-                T::from_f64(a[2] + pg[1]),
-                c.phi_f[3],
-            ],
-            h: [T::from_f64(-pg[0]), T::from_f64(-pg[1])],
-            ..open
+            a,
+            h,
+            ..Self::open(c)
         }
     }
+}
+
+/// An increment map `a` (Φ − I) closed by the correction z += G·(z0 − y0) at the interval's
+/// start: (A + ΦG·e0ᵀ, −ΦG), composed in f64.
+fn close<T: Real>(a: &[T; 4], g: [T; 2]) -> ([T; 4], [T; 2]) {
+    let a64 = a.map(T::to_f64);
+    let g = g.map(T::to_f64);
+    // ΦG = G + A·G.
+    let pg = [
+        g[0] + (a64[0] * g[0] + a64[1] * g[1]),
+        g[1] + (a64[2] * g[0] + a64[3] * g[1]),
+    ];
+    (
+        [
+            T::from_f64(a64[0] + pg[0]),
+            a[1],
+            T::from_f64(a64[2] + pg[1]),
+            a[3],
+        ],
+        [T::from_f64(-pg[0]), T::from_f64(-pg[1])],
+    )
 }
 
 /// The sliding map with the observer's correction z += G·(z0 − y0) at the interval's start:
@@ -94,21 +103,8 @@ pub(super) struct SlideMap<T> {
 impl<T: Real> SlideMap<T> {
     /// The closed sliding map of `c` for the sliding observer's gain `g`.
     pub(super) fn closed(c: &StickSlipCoefficients<T>, g: [T; 2]) -> Self {
-        let a = c.phi_s.map(T::to_f64);
-        let g = g.map(T::to_f64);
-        let pg = [
-            g[0] + (a[0] * g[0] + a[1] * g[1]),
-            g[1] + (a[2] * g[0] + a[3] * g[1]),
-        ];
-        Self {
-            a: [
-                T::from_f64(a[0] + pg[0]),
-                c.phi_s[1],
-                T::from_f64(a[2] + pg[1]),
-                c.phi_s[3],
-            ],
-            h: [T::from_f64(-pg[0]), T::from_f64(-pg[1])],
-        }
+        let (a, h) = close(&c.phi_s, g);
+        Self { a, h }
     }
 }
 
