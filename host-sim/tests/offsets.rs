@@ -1,7 +1,7 @@
 //! What a real lab has (issue 13), on the default scene (2 s, stick-slip model): accelerometer
 //! offsets, a rest before the input, dropped frames. Bounds are a small margin over what is
-//! measured on these 2 s; the unperturbed run is the reference (0.0282 % RMS of the peak with the
-//! sliding observer, 28 of 28 events).
+//! measured on these 2 s; the unperturbed run is the reference (0.0339 % RMS of the peak with the
+//! fuse mode's observers, 28 of 28 events).
 
 use host_sim::run::{run, RunOptions, RunOutcome};
 use host_sim::scene::Scene;
@@ -28,7 +28,7 @@ fn go(s: &Scene, mode: Mode) -> RunOutcome {
 }
 
 /// The base accelerometer 0.05 g off (the slip acceleration's offset: the detector's input): no
-/// event missed or invented, the same error as without it (measured 0.0286 % for every offset,
+/// event missed or invented, the same error as without it (measured 0.0339 % for every offset,
 /// the offset identified within 1.1e-4 m/s²).
 #[test]
 fn a_base_offset_changes_no_event() {
@@ -44,7 +44,7 @@ fn a_base_offset_changes_no_event() {
         assert_eq!(d.missed, 0);
         let e = &out.report.estimator;
         assert!(
-            e.rms_err_pct_of_peak < 0.031,
+            e.rms_err_pct_of_peak < 0.036,
             "base {b}: {} %",
             e.rms_err_pct_of_peak
         );
@@ -54,14 +54,14 @@ fn a_base_offset_changes_no_event() {
 }
 
 /// Every accelerometer 0.05 g off with a 0.5 s rest before the input: the pipeline zeroes them
-/// on the rest (measured: fuse 0.0280 %, predict 0.019 % RMS, offsets within 3e-4 m/s²).
+/// on the rest (measured: fuse 0.0342 %, predict 0.019 % RMS, offsets within 3e-4 m/s²).
 #[test]
 fn a_rest_zeroes_every_accelerometer() {
     let bias = [0.49, -0.49, 0.49];
     for mode in [Mode::Fuse, Mode::Predict] {
         let out = go(&scene(bias, 0.5, 0.0), mode);
         let e = &out.report.estimator;
-        let bound = if mode == Mode::Fuse { 0.031 } else { 0.04 };
+        let bound = if mode == Mode::Fuse { 0.036 } else { 0.04 };
         assert!(
             e.rms_err_pct_of_peak < bound,
             "{mode:?}: {} %",

@@ -31,10 +31,10 @@ const SLIDE_BANDWIDTH_MAX_PER_SAMPLE: f64 = 0.1;
 /// The sliding observer's bandwidth in units of `b`·p·√M before μ̂ is adopted: the error of a
 /// wrong prior's μ grows fast while sliding (measured on the robustness scorecard: μ told 25 %
 /// off, 1.3 % max error of the peak with it, 4.7 % with [`SLIDE_NARROW`]).
-pub(super) const SLIDE_WIDE: f64 = 2.0;
+pub(super) const SLIDE_WIDE: f64 = 4.0;
 /// … and once it is adopted: the model is then close, and a wide observer only lets the
 /// measurement's noise in (unperturbed default scene: 0.059 % RMS with [`SLIDE_WIDE`]).
-pub(super) const SLIDE_NARROW: f64 = 1.0;
+pub(super) const SLIDE_NARROW: f64 = 2.0;
 
 /// The sliding-phase observer's per-sample gain for a bandwidth of `b`·p·√M times
 /// [`SLIDE_WIDE`] or [`SLIDE_NARROW`] (M = 1 + m1/m2; none beyond
@@ -57,7 +57,7 @@ pub(super) fn sliding_observer_gain<T: Real, M: Transcendentals<T>>(
     // most SLIDE_BANDWIDTH_MAX_PER_SAMPLE per sample interval.
     let factor = if wide { SLIDE_WIDE } else { SLIDE_NARROW };
     let root_m = libm::sqrt(mp / p);
-    let bp_dt = factor * b * root_m * p * c.dt.to_f64();
+    let bp_dt = factor * root_m * p * c.dt.to_f64();
     // Only for a sliding oscillator that is underdamped (ζ√M < 1) and slow against the sample
     // rate: placing the poles of a stiff or overdamped one (a nearly massless base) needs huge
     // gains; it then runs open loop, as before the sliding observer.
