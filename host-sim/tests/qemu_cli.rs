@@ -213,8 +213,11 @@ fn check_stick_slip(v: &Value, samples: u64, mu: f64) {
         num(v, "instructions_per_steady_sample"),
         slide.max(stuck_blocks)
     );
+    // One `update()` at a time while sliding (not the pipeline's path, which runs blocks):
+    // measured 52.6 with the sliding observer's correction and its finiteness test (39.2
+    // before it).
     let ips = num(v, "instructions_per_sample");
-    assert!(ips > 20.0 && ips <= 45.0, "instructions per sample {ips}");
+    assert!(ips > 20.0 && ips <= 56.0, "instructions per sample {ips}");
     let stuck = num(v, "instructions_per_sample_stuck");
     assert!(stuck > 20.0 && stuck <= 70.0, "stuck {stuck}");
     let bare = num(v, "instructions_per_sample_without_identification");
