@@ -81,3 +81,27 @@ fn fuse_identifies_f_told_8_percent_off() {
         assert!(e.rms_err_pct_of_peak < 0.15, "f x{f}");
     }
 }
+
+/// The static friction coefficient from the detected slip starts (the force that held the base,
+/// m1·ü1 + m2·üg, at each): El Centro has μs = 0.25 above μ = 0.2; told 0.2 (the detector then
+/// expects ramps, not jumps) or 0.3, or right. Measured: 0.24854 ± 8.0e-4, 0.24995 ± 3.9e-4
+/// (31 slip starts); the default scene (μs = μ = 0.2) 0.19992.
+#[test]
+fn identifies_the_static_friction_at_the_slip_starts() {
+    for (told_s, want) in [(0.2, 0.25), (0.3, 0.25), (0.25, 0.25)] {
+        let mut s = elcentro();
+        s.estimator.static_friction_coefficient = told_s;
+        let out = go(&s, Mode::Fuse);
+        let id = &out.report.estimator.identified;
+        let (mu_s, n) = (
+            id.static_friction_coefficient,
+            id.static_friction_slip_starts.unwrap(),
+        );
+        println!("told {told_s}: mu_s {mu_s} from {n} slip starts");
+        assert_eq!(n, 31);
+        assert!((mu_s / want - 1.0).abs() < 8e-3, "told {told_s}: {mu_s}");
+    }
+    let out = go(&Scene::default_scene(), Mode::Fuse);
+    let mu_s = out.report.estimator.identified.static_friction_coefficient;
+    assert!((mu_s / 0.2 - 1.0).abs() < 1e-3, "{mu_s}");
+}

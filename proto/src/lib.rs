@@ -43,7 +43,8 @@ pub use detector::{AccelerationDetector, DetectorInput, DisplacementDetector, Ev
 pub use event::{Event, EventKind};
 pub use frame::{Frame, Sample};
 pub use model::{
-    FixedBaseModel, FromPlan, Mode, Model, ModelKind, Pushed, RectangularModel, StickSlipModel,
+    FixedBaseModel, FromPlan, Mode, Model, ModelKind, Pushed, RectangularModel, StaticFriction,
+    StickSlipModel,
 };
 pub use pipeline::{EventSource, Pipeline, Stats, Step, BATCH};
 pub use plan::{DetectorPlan, Plan, PlanError, Specimen};

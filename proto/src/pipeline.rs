@@ -254,6 +254,8 @@ pub trait Step {
     fn offsets(&self) -> [f32; 3];
     /// The model's identified and adopted f and ξ ([`Model::oscillator`]).
     fn oscillator(&self) -> Option<crate::model::OscillatorReport>;
+    /// The model's static friction identified at the slip starts ([`Model::static_friction`]).
+    fn static_friction(&self) -> Option<crate::model::StaticFriction>;
 }
 
 impl<M: Model, D: EventDetector> Step for Pipeline<M, D> {
@@ -280,5 +282,8 @@ impl<M: Model, D: EventDetector> Step for Pipeline<M, D> {
     }
     fn oscillator(&self) -> Option<crate::model::OscillatorReport> {
         self.model.oscillator()
+    }
+    fn static_friction(&self) -> Option<crate::model::StaticFriction> {
+        self.model.static_friction()
     }
 }

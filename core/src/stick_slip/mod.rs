@@ -73,6 +73,7 @@
 //! then needs no f64 code but the few operations that derive the n-step maps at construction).
 
 mod block;
+mod breakaway;
 mod coefficients;
 mod config;
 mod estimator;

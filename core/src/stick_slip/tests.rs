@@ -665,3 +665,38 @@ fn sliding_phases_are_their_friction_levels() {
     e.push_event(SlidingPhase::Negative.level(), 0.0).unwrap();
     assert_eq!(e.phase(), SlidingPhase::Negative);
 }
+
+/// The breakaway coefficient at an age: |(M − 1)·ü1 + üg| / (M·g) of the top and table
+/// accelerations interpolated at that time, computed here by hand from the inputs fed.
+#[test]
+fn breakaway_coefficient_interpolates_the_held_force() {
+    let s = structure(0.2, 0.05);
+    let cfg = StickSlipConfig {
+        identify_mu: false,
+        ..StickSlipConfig::DEFAULT
+    };
+    let mut est = StickSlipEstimator::<f64, Libm, 40>::with_history(&s, 1e4, cfg, 39).unwrap();
+    let u = |k: u64| 0.5 + 0.01 * k as f64;
+    let y = |k: u64| 1.0 - 0.02 * k as f64;
+    for k in 0..100u64 {
+        est.update(u(k), y(k));
+    }
+    // The next sample is 100; age 2.25 is time 97.75.
+    let m = s.mass_ratio();
+    let want = |t: f64| {
+        let (uu, yy) = (0.5 + 0.01 * t, 1.0 - 0.02 * t);
+        ((m - 1.0) * yy + uu).abs() / (m * s.g())
+    };
+    for age in [1.0, 2.25, 10.5, 30.0] {
+        let got = est.breakaway_coefficient(age, true).unwrap();
+        assert!((got - want(100.0 - age)).abs() < 1e-12, "{age}: {got}");
+    }
+    // Younger than the last kept sample: that sample's value.
+    let got = est.breakaway_coefficient(0.3, true).unwrap();
+    assert!((got - want(99.0)).abs() < 1e-12, "{got}");
+    assert!(est.breakaway_coefficient(38.5, true).is_none());
+    assert!(est.breakaway_coefficient(-1.0, true).is_none());
+    assert!(est.breakaway_coefficient(f64::NAN, true).is_none());
+    // The model's own prediction instead of the measurement: finite.
+    assert!(est.breakaway_coefficient(2.0, false).unwrap().is_finite());
+}

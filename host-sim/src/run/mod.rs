@@ -264,6 +264,7 @@ fn outcome(
             plan,
             mu.map(|m| m.mu),
             runner.pipe.oscillator(),
+            runner.pipe.static_friction(),
             runner.pipe.offsets(),
         ),
         mu_estimate: mu.map(|m| m.mu),

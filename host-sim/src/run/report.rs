@@ -56,7 +56,8 @@ impl TruthStats {
 /// The specimen's parameters and the accelerometers' offsets as the estimator ends the run
 /// (`estimator.identified` in `run --json`). The natural frequency and the damping ratio are the
 /// online estimates when the model identifies them (stick-slip and fixed-base models, fuse mode),
-/// else the prior's; the static friction coefficient is the prior's; the friction
+/// else the prior's; the static friction coefficient is the mean breakaway coefficient of the
+/// detected slip starts (stick-slip model; else the prior's); the friction
 /// coefficient is μ̂ when the model identified it, else the prior's; the offsets are those the
 /// pipeline removed: table and top from the rest before the input (zero without one), the base
 /// from the rest plus the slip acceleration's offset its detector tracks (the base against the
@@ -83,6 +84,13 @@ pub struct Identified {
     /// times it adopted identified ones (absent: the model does not identify them).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub in_use: Option<InUse>,
+    /// Standard deviation of one slip start's breakaway coefficient (absent: not identified).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub static_friction_coefficient_std: Option<f64>,
+    /// Slip starts the static friction coefficient was identified from (absent: not
+    /// identified).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub static_friction_slip_starts: Option<u32>,
 }
 
 /// The f and ξ a model used at the end of a run (`estimator.identified.in_use`).
@@ -102,6 +110,7 @@ impl Identified {
         plan: &ssvr_proto::Plan,
         mu: Option<f64>,
         oscillator: Option<ssvr_proto::model::OscillatorReport>,
+        static_friction: Option<ssvr_proto::StaticFriction>,
         offsets: [f32; 3],
     ) -> Self {
         let p = &plan.specimen.structure;
@@ -110,7 +119,8 @@ impl Identified {
             natural_frequency_hz: est.map_or(p.natural_frequency_hz, |e| e.natural_frequency_hz),
             damping_ratio: est.map_or(p.damping_ratio, |e| e.damping_ratio),
             friction_coefficient: mu.unwrap_or(p.friction_coefficient),
-            static_friction_coefficient: plan.specimen.static_friction_coefficient,
+            static_friction_coefficient: static_friction
+                .map_or(plan.specimen.static_friction_coefficient, |s| s.mu_s),
             accel_bias_m_s2: offsets.map(f64::from),
             natural_frequency_std_hz: est.map(|e| e.natural_frequency_std_hz),
             damping_ratio_std: est.map(|e| e.damping_ratio_std),
@@ -119,6 +129,8 @@ impl Identified {
                 damping_ratio: o.damping_ratio,
                 adoptions: o.adoptions,
             }),
+            static_friction_coefficient_std: static_friction.map(|s| s.std),
+            static_friction_slip_starts: static_friction.map(|s| s.slip_starts),
         }
     }
 }

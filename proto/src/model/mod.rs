@@ -187,6 +187,55 @@ pub trait Model {
     fn oscillator(&self) -> Option<OscillatorReport> {
         None
     }
+    /// The static friction coefficient identified at the slip starts, if the model does so
+    /// (the stick-slip model).
+    fn static_friction(&self) -> Option<StaticFriction> {
+        None
+    }
+}
+
+/// The static (breakaway) friction coefficient identified at the detected slip starts
+/// ([`StickSlipEstimator::breakaway_coefficient`](ssvr_core::stick_slip::StickSlipEstimator::breakaway_coefficient)):
+/// their mean and standard deviation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StaticFriction {
+    /// μ̂s: the mean over the slip starts.
+    pub mu_s: f64,
+    /// The standard deviation of one slip start's value (the mean's is this / √n).
+    pub std: f64,
+    /// Slip starts used.
+    pub slip_starts: u32,
+}
+
+/// Running mean and variance (Welford) of the slip starts' breakaway coefficients.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct Breakaways {
+    n: u32,
+    mean: f32,
+    m2: f32,
+}
+
+impl Breakaways {
+    /// One slip start's coefficient.
+    pub(crate) fn push(&mut self, mu: f32) {
+        self.n = self.n.saturating_add(1);
+        let d = mu - self.mean;
+        self.mean += d / self.n as f32;
+        self.m2 += d * (mu - self.mean);
+    }
+
+    /// The estimate, once there is a slip start.
+    pub(crate) fn report(&self) -> Option<StaticFriction> {
+        (self.n > 0).then(|| StaticFriction {
+            mu_s: self.mean as f64,
+            std: if self.n > 1 {
+                libm::sqrt((self.m2 / (self.n - 1) as f32).max(0.0) as f64)
+            } else {
+                0.0
+            },
+            slip_starts: self.n,
+        })
+    }
 }
 
 /// A model chosen at run time (the host picks the firmware's model type from a plan).
@@ -212,6 +261,9 @@ impl<M: Model + ?Sized> Model for std::boxed::Box<M> {
     }
     fn oscillator(&self) -> Option<OscillatorReport> {
         (**self).oscillator()
+    }
+    fn static_friction(&self) -> Option<StaticFriction> {
+        (**self).static_friction()
     }
 }
 

@@ -7,9 +7,9 @@
 //! `update_block` (bit for bit `update` on each sample).
 
 use super::tuning::{OscillatorReport, Tuning};
-use super::{FromPlan, Mode, Model, ModelKind, Pushed};
+use super::{Breakaways, FromPlan, Mode, Model, ModelKind, Pushed, StaticFriction};
 use crate::channel::{Channel, CHANNELS};
-use crate::event::Event;
+use crate::event::{Event, EventKind};
 use crate::flags;
 use crate::frame::Frame;
 use crate::pipeline::BATCH;
@@ -34,6 +34,10 @@ pub struct StickSlipModel<const H: usize, const EVENTS: bool = true> {
     pred: [f32; BATCH],
     /// f and ξ identified and adopted online (fuse mode).
     tuning: Option<Tuning>,
+    /// Fuse mode: the breakaway coefficients read the measured top acceleration (else the
+    /// model's own).
+    fuse: bool,
+    breakaways: Breakaways,
 }
 
 /// The estimator's inputs of a sample: the table acceleration, and the top acceleration (NaN
@@ -62,6 +66,8 @@ impl<const H: usize, const EVENTS: bool> StickSlipModel<H, EVENTS> {
             base: [0.0; BATCH],
             pred: [0.0; BATCH],
             tuning: None,
+            fuse: true,
+            breakaways: Breakaways::default(),
         }
     }
 
@@ -97,7 +103,9 @@ impl<const H: usize, const EVENTS: bool> FromPlan for StickSlipModel<H, EVENTS> 
             Mode::Fuse => Tuning::new(plan.specimen.structure, plan.specimen.sample_rate_hz),
             Mode::Predict => None,
         };
-        Ok(Self::new(est, plan.max_age as f32).with_tuning(tuning))
+        let mut m = Self::new(est, plan.max_age as f32).with_tuning(tuning);
+        m.fuse = plan.mode == Mode::Fuse;
+        Ok(m)
     }
 }
 
@@ -116,6 +124,11 @@ impl<const H: usize, const EVENTS: bool> Model for StickSlipModel<H, EVENTS> {
             return Ok(Pushed::No);
         }
         let phase = if e.is_stick() { 0 } else { e.level };
+        if e.kind == EventKind::SlipStart && e.age_samples <= self.max_age {
+            if let Some(mu) = self.est.breakaway_coefficient(e.age_samples, self.fuse) {
+                self.breakaways.push(mu);
+            }
+        }
         if e.age_samples > self.max_age {
             self.est.push_event(phase, self.max_age)?;
             Ok(Pushed::Clamped)
@@ -173,5 +186,13 @@ impl<const H: usize, const EVENTS: bool> Model for StickSlipModel<H, EVENTS> {
 
     fn oscillator(&self) -> Option<OscillatorReport> {
         self.tuning.as_ref().map(Tuning::report)
+    }
+
+    fn static_friction(&self) -> Option<StaticFriction> {
+        if EVENTS {
+            self.breakaways.report()
+        } else {
+            None
+        }
     }
 }

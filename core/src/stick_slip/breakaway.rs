@@ -1,0 +1,43 @@
+//! The static (breakaway) friction coefficient at a slip start: while the base sticks it moves
+//! with the table, so the friction holding it is m1·ü1 + m2·üg; at the slip start that force
+//! reaches μs·(m1 + m2)·g. Hence μs = |(M − 1)·ü1 + üg| / (M·g), M = 1 + m1/m2, from the top
+//! and table accelerations at the slip start's time (interpolated between the kept samples).
+
+use super::estimator::StickSlipEstimator;
+use crate::math::{Real, Transcendentals};
+
+impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H> {
+    /// The friction coefficient that held the base `age` samples before the next sample (a
+    /// detected slip start's age): |(M − 1)·ü1 + üg| / (M·g), with ü1 the measured top
+    /// acceleration (`measured`: the fuse mode) or the model's own prediction (the predict
+    /// mode) and üg the measured table acceleration, interpolated linearly between the two
+    /// kept samples around that time. `None` outside the history, for a negative or non-finite
+    /// age, or with a non-finite measurement.
+    pub fn breakaway_coefficient(&self, age: T, measured: bool) -> Option<T> {
+        let k = self.sample_index();
+        if !(age >= T::ZERO) || k == 0 {
+            return None;
+        }
+        // The time k − age lies between samples j0 = k − ⌈age⌉ and j0 + 1 (the latest kept
+        // sample is k − 1: a younger time takes it).
+        let back = age.to_f64();
+        if !(back < self.len as f64 - 1.0) {
+            return None;
+        }
+        let whole = libm::ceil(back).max(1.0);
+        let j0 = k.checked_sub(whole as u64)?;
+        let w = T::from_f64(whole - back);
+        let at = |j: u64| {
+            self.slots.get(self.slot_of(j)).map(|s| {
+                let top = if measured { s.y } else { s.z[0] };
+                (s.u, top)
+            })
+        };
+        let (u0, y0) = at(j0)?;
+        let (u1, y1) = if j0 + 1 < k { at(j0 + 1)? } else { (u0, y0) };
+        let (u, y) = (u0 + (u1 - u0) * w, y0 + (y1 - y0) * w);
+        let m = self.c.mp / self.c.p;
+        let mu = ((m - T::ONE) * y + u).abs() / (m * self.c.g);
+        mu.is_finite().then_some(mu)
+    }
+}
