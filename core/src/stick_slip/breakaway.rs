@@ -15,13 +15,10 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
     /// age, or with a non-finite measurement.
     pub fn breakaway_coefficient(&self, age: T, measured: bool) -> Option<T> {
         let k = self.sample_index();
-        if !(age >= T::ZERO) || k == 0 {
-            return None;
-        }
         // The time k − age lies between samples j0 = k − ⌈age⌉ and j0 + 1 (the latest kept
-        // sample is k − 1: a younger time takes it).
+        // sample is k − 1: a younger time takes it); NaN fails the range test.
         let back = age.to_f64();
-        if !(back < self.len as f64 - 1.0) {
+        if k == 0 || !(0.0..self.len as f64 - 1.0).contains(&back) {
             return None;
         }
         let whole = libm::ceil(back).max(1.0);
