@@ -256,6 +256,9 @@ pub trait Step {
     fn oscillator(&self) -> Option<crate::model::OscillatorReport>;
     /// The model's static friction identified at the slip starts ([`Model::static_friction`]).
     fn static_friction(&self) -> Option<crate::model::StaticFriction>;
+    /// The base accelerometer's gain against the table's, as its detector tracks and removes it
+    /// ([`EventDetector::gain_mismatch`]; 0 for the displacement detector).
+    fn gain_mismatch(&self) -> f32;
 }
 
 impl<M: Model, D: EventDetector> Step for Pipeline<M, D> {
@@ -285,5 +288,8 @@ impl<M: Model, D: EventDetector> Step for Pipeline<M, D> {
     }
     fn static_friction(&self) -> Option<crate::model::StaticFriction> {
         self.model.static_friction()
+    }
+    fn gain_mismatch(&self) -> f32 {
+        self.detector.gain_mismatch()
     }
 }

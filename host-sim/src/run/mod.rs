@@ -266,6 +266,7 @@ fn outcome(
             runner.pipe.oscillator(),
             runner.pipe.static_friction(),
             runner.pipe.offsets(),
+            (model == Model::StickSlip).then(|| runner.pipe.gain_mismatch()),
         ),
         mu_estimate: mu.map(|m| m.mu),
         mu_std: mu.map(|m| m.std),

@@ -91,6 +91,10 @@ pub struct Identified {
     /// identified).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub static_friction_slip_starts: Option<u32>,
+    /// The base accelerometer's gain relative to the table's, minus 1, as the slip-acceleration
+    /// detector tracks and removes it (absent: the displacement detector).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub base_vs_table_gain_error: Option<f64>,
 }
 
 /// The f and ξ a model used at the end of a run (`estimator.identified.in_use`).
@@ -112,6 +116,7 @@ impl Identified {
         oscillator: Option<ssvr_proto::model::OscillatorReport>,
         static_friction: Option<ssvr_proto::StaticFriction>,
         offsets: [f32; 3],
+        gain_mismatch: Option<f32>,
     ) -> Self {
         let p = &plan.specimen.structure;
         let est = oscillator.and_then(|o| o.estimate);
@@ -131,6 +136,7 @@ impl Identified {
             }),
             static_friction_coefficient_std: static_friction.map(|s| s.std),
             static_friction_slip_starts: static_friction.map(|s| s.slip_starts),
+            base_vs_table_gain_error: gain_mismatch.map(f64::from),
         }
     }
 }
