@@ -353,3 +353,41 @@ fn text_cells_and_time_gaps_are_flagged_samples() {
         assert!(p.parse::<f32>().unwrap().is_finite(), "{p}");
     }
 }
+
+#[test]
+fn plot_svg_and_png() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write(dir.path(), "short.toml", &run_scene(0.5, "", ""));
+    let run_csv = dir.path().join("run.csv");
+    ok(&host_sim()
+        .args(["run", scene.to_str().unwrap(), "--out"])
+        .arg(&run_csv)
+        .output()
+        .unwrap());
+    let rep = write(
+        dir.path(),
+        "rep.toml",
+        &replay_scene("run.csv", RUN_COLUMNS),
+    );
+    for name in ["p.svg", "p.png"] {
+        let p = dir.path().join(name);
+        let out = host_sim()
+            .args([
+                "replay",
+                rep.to_str().unwrap(),
+                "--plot-window",
+                "0.3",
+                "--plot",
+            ])
+            .arg(&p)
+            .output()
+            .unwrap();
+        ok(&out);
+        assert!(std::fs::metadata(&p).unwrap().len() > 10_000, "{name}");
+    }
+    let bad = host_sim()
+        .args(["replay", rep.to_str().unwrap(), "--plot", "x.pdf"])
+        .output()
+        .unwrap();
+    assert!(!bad.status.success());
+}

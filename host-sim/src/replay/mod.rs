@@ -20,7 +20,9 @@ pub use report::{summary_text, EventCounts, ReplayReport, VsMeasured};
 
 use crate::model::Model;
 use crate::pipeline;
-use crate::run::{EventMark, Identified, Interrupted, Num, FLUSH_EVERY_ROWS};
+use crate::run::{
+    EventMark, Identified, Interrupted, Num, PlotCollector, PlotData, PlotPoint, FLUSH_EVERY_ROWS,
+};
 use anyhow::{anyhow, bail, Context, Result};
 use reader::{Item, Reader};
 use ssvr_proto::{flags, Channel, Frame, Mode, Step};
@@ -52,6 +54,9 @@ pub struct ReplayOptions {
     pub model: Option<Model>,
     /// What the model may read; `None`: fuse with a top column, else predict.
     pub mode: Option<Mode>,
+    /// Keep the series of a time window for a plot: its start (s, the recording's time; `None`:
+    /// the first row's) and length (s; infinite: to the end).
+    pub plot_window: Option<(Option<f64>, f64)>,
 }
 
 impl ReplayOptions {
@@ -61,6 +66,7 @@ impl ReplayOptions {
             out_name: out_name.into(),
             model: None,
             mode: None,
+            plot_window: None,
         }
     }
 }
@@ -73,6 +79,9 @@ pub struct ReplayOutcome {
     /// Detected slip starts, reversals and sticks, in order, with the measured slip (m) at
     /// their detection.
     pub detected: Vec<(EventMark, f64)>,
+    /// The plot series (when a window was asked for): measured and predicted top acceleration,
+    /// the measured slip and the detected events.
+    pub plot: Option<PlotData>,
 }
 
 /// The default CSV output: `<scene-stem>.replay.csv` next to the scene file.
@@ -243,7 +252,13 @@ pub fn replay<W: Write>(
         rows: 0,
     };
     out.header()?;
-    let mut state = Loop::default();
+    let mut state = Loop {
+        plot: opts.plot_window.map(|(from, len)| {
+            let from = from.unwrap_or(rdr.t0);
+            PlotCollector::new((from, from + len), rdr.rate_hz, rdr.estimated_samples())
+        }),
+        ..Loop::default()
+    };
     let result = samples(
         &mut rdr,
         pipe.as_mut(),
@@ -292,9 +307,13 @@ pub fn replay<W: Write>(
         vs_measured_top: top.then(|| state.compare.report()),
         runtime_s: 0.0,
     };
+    let plot = state
+        .plot
+        .map(|p| p.finish_measured(&state.detected, &scene.name));
     Ok(ReplayOutcome {
         report,
         detected: state.detected,
+        plot,
     })
 }
 
@@ -306,6 +325,7 @@ struct Loop {
     compare: Compare,
     kinds: Vec<&'static str>,
     detected: Vec<(EventMark, f64)>,
+    plot: Option<PlotCollector>,
 }
 
 /// Every sample of the recording through the pipeline into the CSV.
@@ -343,7 +363,7 @@ fn samples<W: Write>(
         }
         if let Some(e) = frame.event {
             state.kinds.push(e.kind.name());
-            let slip = f64::from(item.sample.channels[Channel::Displacement.index()]);
+            let slip = item.measured[Channel::Displacement.index()].map_or(0.0, f64::from);
             state.detected.push((
                 EventMark {
                     time_s: item.t - f64::from(e.age_samples) / rate,
@@ -353,6 +373,20 @@ fn samples<W: Write>(
                 },
                 slip,
             ));
+        }
+        if let Some(p) = state.plot.as_mut() {
+            let top = item.measured[Channel::TopAccel.index()];
+            let slip = item.measured[Channel::Displacement.index()];
+            p.push(
+                item.t,
+                &PlotPoint {
+                    measured: top.map_or(f64::NAN, f64::from),
+                    predicted: f64::from(frame.prediction),
+                    truth: f64::NAN,
+                    slip_measured: slip.map_or(f64::NAN, f64::from),
+                    slip_truth: f64::NAN,
+                },
+            );
         }
         out.row(&item, &frame)?;
     }

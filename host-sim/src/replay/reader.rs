@@ -168,6 +168,17 @@ impl Reader {
         self.rdr.position().byte()
     }
 
+    /// An estimate of the samples in the file (for a plot's decimation): its size over the
+    /// bytes per row of the rows read so far (40 bytes a row before any).
+    pub fn estimated_samples(&self) -> u64 {
+        let (pos, rows) = (self.position(), self.counts.rows);
+        if rows > 0 && pos > 0 {
+            (self.size as f64 * rows as f64 / pos as f64) as u64
+        } else {
+            self.size / 40
+        }
+    }
+
     /// Which channels have a column.
     pub fn present(&self) -> [bool; 4] {
         self.cols.map(|c| c.is_some())
