@@ -10,6 +10,7 @@
 //!   model, and the pipeline built from it, which `run` predicts with.
 //! * [`run`]: the main job: truth, sensors, the pipeline (detector and the f32 estimator), sample
 //!   by sample, streamed to CSV, with error and detection statistics.
+//! * [`replay`]: a recorded test (a scene's `[recording]` CSV) through the same pipeline as `run`.
 //! * [`qemu`]: `host-sim qemu`, the firmware under QEMU, every prediction against the host's run
 //!   of the same pipeline and a full-precision reference.
 //! * [`report`]: the data of `bench` (speed against error of every method) and `reproduce` (the
@@ -24,6 +25,7 @@ pub mod model;
 pub mod pipeline;
 pub mod plot;
 pub mod qemu;
+pub mod replay;
 pub mod report;
 pub mod run;
 pub mod sensors;

@@ -28,10 +28,20 @@ pub fn plan_for(scene: &Scene, model: ModelKind) -> Result<Plan> {
 /// The plan of a scene, a model and a mode (with the scene's rest before the input, whose
 /// accelerometer readings the pipeline zeroes).
 pub fn plan_for_mode(scene: &Scene, model: ModelKind, mode: Mode) -> Result<Plan> {
-    Ok(Plan::new(specimen_of(scene), model)
+    plan_for_specimen(&crate::scene::Specimen::from(scene), model, mode)
+}
+
+/// The plan of a specimen (its prior, rate and rest before the input), a model and a mode:
+/// [`plan_for_mode`] of a scene, and `host-sim replay`'s plan of a recording's specimen.
+pub fn plan_for_specimen(
+    specimen: &crate::scene::Specimen,
+    model: ModelKind,
+    mode: Mode,
+) -> Result<Plan> {
+    Ok(Plan::new(specimen.prior(), model)
         .map_err(|e| anyhow!("no {} pipeline for the scene: {e}", model.name()))?
         .with_mode(mode)
-        .with_rest(scene.start_s))
+        .with_rest(specimen.start_s))
 }
 
 /// Options of a host pipeline beyond the plan.

@@ -14,6 +14,7 @@ use crate::error::SceneError;
 use crate::estimator::{Prior, RawEstimator};
 use crate::input::{Input, RawInput};
 use crate::parse::ParseContext;
+use crate::recording::{RawRecording, Recording};
 use crate::scene::MAX_SAMPLES;
 use crate::sensors::{RawSensors, Sensors};
 use crate::structure::RawStructure;
@@ -44,6 +45,7 @@ pub(crate) struct RawScene {
     estimator: Option<Spanned<RawEstimator>>,
     input: Option<Spanned<RawInput>>,
     sampling: Option<Spanned<RawSampling>>,
+    recording: Option<Spanned<RawRecording>>,
     // Not spanned: a `[sensors.<channel>]` or `adc.<key>` alone defines them implicitly, and an
     // implicit table has no span.
     sensors: Option<RawSensors>,
@@ -64,6 +66,9 @@ pub(crate) enum Motion {
     Required,
     /// A specimen: both optional, validated when present.
     Optional,
+    /// A recorded test to replay: `[recording]` required; `duration_s`, `[input]` and
+    /// `[sampling]` rejected (the recording sets them).
+    Recording,
 }
 
 /// The validated parts of a document.
@@ -79,6 +84,8 @@ pub(crate) struct Document {
     pub(crate) start_s: f64,
     pub(crate) sensors: Sensors,
     pub(crate) board: BoardSettings,
+    /// `[recording]` (a replay scene only).
+    pub(crate) recording: Option<Recording>,
 }
 
 impl ParseContext<'_> {
@@ -95,6 +102,17 @@ impl ParseContext<'_> {
 
     /// Validate the document.
     pub(crate) fn document(&self, raw: &RawScene, motion: Motion) -> Result<Document, SceneError> {
+        if motion == Motion::Recording {
+            return self.recording_document(raw);
+        }
+        if let Some(r) = &raw.recording {
+            return Err(self.err(
+                r.span(),
+                "[recording]: a scene with a recording is replayed with `host-sim replay`, \
+                 not simulated (it has no [input])"
+                    .into(),
+            ));
+        }
         // Missing keys and tables first, in the order of the layout.
         if motion == Motion::Required {
             self.required(&raw.duration_s, "missing key `duration_s`")?;
@@ -177,6 +195,72 @@ impl ParseContext<'_> {
             start_s,
             sensors,
             board,
+            recording: None,
+        })
+    }
+
+    /// The walk of a replay scene: `[structure]`, `[estimator]`, `[sensors]` and
+    /// `[recording]`; the keys a recording sets (`duration_s`, `[input]`, `[sampling]`) are
+    /// rejected. Board settings are checked for their keys only (a replay has no board image);
+    /// the rate is the recording's.
+    fn recording_document(&self, raw: &RawScene) -> Result<Document, SceneError> {
+        let structure_table = self.required(&raw.structure, "missing table [structure]")?;
+        let recording_table = self.required(&raw.recording, "missing table [recording]")?;
+        let set_by_recording = [
+            ("duration_s", raw.duration_s.as_ref().map(Spanned::span)),
+            ("[input]", raw.input.as_ref().map(Spanned::span)),
+            ("[sampling]", raw.sampling.as_ref().map(Spanned::span)),
+        ];
+        for (what, span) in set_by_recording {
+            if let Some(span) = span {
+                return Err(self.err(
+                    span,
+                    format!(
+                        "{what} does not apply to a scene with a [recording] (the recording \
+                         sets it)"
+                    ),
+                ));
+            }
+        }
+        let gravity = match &raw.gravity_m_s2 {
+            Some(g) => self.check(
+                None,
+                "gravity_m_s2",
+                g,
+                *g.get_ref() > 0.0,
+                "gravity_m_s2 > 0 m/s^2",
+            )?,
+            None => STANDARD_GRAVITY,
+        };
+        let (structure, mu_s) = self.structure(structure_table, gravity, &raw.gravity_m_s2)?;
+        let prior = self.estimator(raw.estimator.as_ref(), &structure, mu_s)?;
+        let recording = self.recording(recording_table)?;
+        let sensors = match raw.sensors.as_ref() {
+            Some(s) => self.sensors(s)?,
+            None => Sensors::default(),
+        };
+        let rate_hz = match recording.time {
+            crate::recording::Timebase::Rate(r) => r,
+            // Set from the time column when the file is read.
+            crate::recording::Timebase::Column(_) => f64::NAN,
+        };
+        let name = raw.name.clone().unwrap_or_else(|| {
+            self.origin
+                .file_stem()
+                .map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned())
+        });
+        Ok(Document {
+            name,
+            duration: None,
+            rate_hz,
+            structure,
+            static_friction_coefficient: mu_s,
+            prior,
+            input: None,
+            start_s: recording.start_s,
+            board: BoardSettings::defaults(1.0, &sensors),
+            sensors,
+            recording: Some(recording),
         })
     }
 }

@@ -41,6 +41,9 @@
 //!   script): structure, friction, gravity, rate, sensors and board settings; `duration_s` and
 //!   `[input]` optional, validated when present. Same walk, same messages.
 //! * [`parse_record`]: an earthquake record file on its own.
+//! * [`ReplayScene::load`] / [`ReplayScene::parse`]: a recorded test to replay (`host-sim
+//!   replay`): the specimen and a `[recording]` (see [`Recording`]) instead of `duration_s`,
+//!   `[input]` and `[sampling]`; the other entry points reject a `[recording]`.
 //!
 //! The parser's parts are private modules whose types are re-exported here; [`table_motion`] is
 //! the table acceleration of a scene.
@@ -53,6 +56,7 @@ mod estimator;
 mod input;
 mod parse;
 mod record;
+mod recording;
 mod scene;
 mod sensors;
 mod specimen;
@@ -67,6 +71,7 @@ pub use error::SceneError;
 pub use estimator::Prior;
 pub use input::{Input, Reversals};
 pub use record::{parse_record, Record};
+pub use recording::{Recording, ReplayScene, SlipUnits, Timebase};
 pub use scene::{Scene, MAX_SAMPLES};
 pub use sensors::Sensors;
 pub use specimen::Specimen;

@@ -1,6 +1,7 @@
 //! The `host-sim` command line: the commands ([`Cli`], parsed by clap) and one module per command
 //! with its arguments and handler.
 //!
+//! * [`replay`]: a recorded test through the same pipeline.
 //! * [`run`]: the main job (also `host-sim` with no command); [`qemu`]: the firmware under QEMU.
 //! * [`peak`], [`trace`], [`check`]: the methods on one scene ([`crate::methods`]).
 //! * [`bench`](mod@bench): speed against error of every method; [`reproduce`]: the paper's
@@ -10,6 +11,7 @@ pub mod bench;
 pub mod check;
 pub mod peak;
 pub mod qemu;
+pub mod replay;
 pub mod reproduce;
 pub mod robustness;
 pub mod run;
@@ -35,6 +37,10 @@ enum Command {
     /// the friction reversals in the measured slip and predict ü1 with the firmware's f32
     /// estimator, sample by sample; stream a CSV row per sample and print a summary.
     Run(run::RunArgs),
+    /// Replay a recorded test (a scene with a [recording]: a CSV of the measured channels)
+    /// through the controller's pipeline, sample by sample; stream a CSV row per sample with the
+    /// predicted ü1 and the detected events, and print a summary.
+    Replay(replay::ReplayArgs),
     /// Steady-state peak of |ü1| of a harmonic scene by the trapezoid or rectangular Fourier method.
     Peak(peak::PeakArgs),
     /// CSV trace `t_s,top_accel_m_s2` of the top-mass acceleration ü1 at the scene's samples.
@@ -64,6 +70,7 @@ impl Cli {
         match self.command {
             None => run::command(run::RunArgs::default()),
             Some(Command::Run(args)) => run::command(args),
+            Some(Command::Replay(args)) => replay::command(args),
             Some(Command::Peak(args)) => peak::command(args),
             Some(Command::Trace(args)) => trace::command(args),
             Some(Command::Check(args)) => check::command(args),

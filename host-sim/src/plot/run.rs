@@ -122,6 +122,10 @@ fn line<DB: DrawingBackend>(
     label: &str,
 ) -> DrawResult<DB> {
     let legend = move |(x, y): (i32, i32)| PathElement::new([(x, y), (x + 28, y)], style);
+    // An empty series (a replay has no truth) gets no legend entry.
+    if data.is_empty() {
+        return Ok(());
+    }
     if segmented && style.stroke_width > 1 {
         chart
             .draw_series(
@@ -155,13 +159,22 @@ fn draw<DB: DrawingBackend>(
     let t_lo = d
         .truth
         .first()
+        .or(d.predicted.first())
         .map_or(from, |p| p.0)
         .min(d.measured.first().map_or(from, |p| p.0));
-    let t_hi = d.truth.last().map_or(to, |p| p.0).max(t_lo + 1e-9);
-    let title = format!(
-        "{} — estimator run, t = {:.3} … {:.3} s",
-        d.scene, t_lo, t_hi
-    );
+    let t_hi = d
+        .truth
+        .last()
+        .or(d.measured.last())
+        .or(d.predicted.last())
+        .map_or(to, |p| p.0)
+        .max(t_lo + 1e-9);
+    let what = if d.truth.is_empty() {
+        "replay"
+    } else {
+        "estimator run"
+    };
+    let title = format!("{} — {what}, t = {:.3} … {:.3} s", d.scene, t_lo, t_hi);
     let root = root.titled(&title, ("sans-serif", 26))?;
     let (top, bottom) = root.split_vertically((56).percent_height());
 
@@ -244,14 +257,18 @@ fn draw<DB: DrawingBackend>(
             .collect()
     };
     let green = RGBColor(0, 150, 60);
-    chart
-        .draw_series(
-            pts(&d.true_events, false)
-                .into_iter()
-                .map(|p| Cross::new(p, 7, BLACK.stroke_width(2))),
-        )?
-        .label("true slip start / reversal")
-        .legend(|(x, y)| Cross::new((x + 14, y), 7, BLACK.stroke_width(2)));
+    // A replay has no truth: no true events in the legend.
+    let has_truth = !d.truth.is_empty();
+    if has_truth {
+        chart
+            .draw_series(
+                pts(&d.true_events, false)
+                    .into_iter()
+                    .map(|p| Cross::new(p, 7, BLACK.stroke_width(2))),
+            )?
+            .label("true slip start / reversal")
+            .legend(|(x, y)| Cross::new((x + 14, y), 7, BLACK.stroke_width(2)));
+    }
     chart
         .draw_series(
             pts(&d.detected, false)
@@ -263,14 +280,16 @@ fn draw<DB: DrawingBackend>(
     let true_sticks = pts(&d.true_events, true);
     let det_sticks = pts(&d.detected, true);
     if !true_sticks.is_empty() || !det_sticks.is_empty() {
-        chart
-            .draw_series(
-                true_sticks
-                    .into_iter()
-                    .map(|p| TriangleMarker::new(p, 7, BLACK.filled())),
-            )?
-            .label("true stick")
-            .legend(|(x, y)| TriangleMarker::new((x + 14, y), 7, BLACK.filled()));
+        if has_truth {
+            chart
+                .draw_series(
+                    true_sticks
+                        .into_iter()
+                        .map(|p| TriangleMarker::new(p, 7, BLACK.filled())),
+                )?
+                .label("true stick")
+                .legend(|(x, y)| TriangleMarker::new((x + 14, y), 7, BLACK.filled()));
+        }
         chart
             .draw_series(
                 det_sticks

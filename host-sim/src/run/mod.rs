@@ -50,6 +50,7 @@ mod tests;
 
 pub use csv::{default_out_path, Num, CSV_HEADER, FLUSH_EVERY_ROWS};
 pub use events::{match_events, DetectionStats, EventMark, DEFAULT_MATCH_TOLERANCE_S};
+pub(crate) use plot::{PlotCollector, PlotPoint};
 pub use plot::{PlotData, Series, DEFAULT_PLOT_WINDOW_S, PLOT_BUCKETS};
 pub use report::{
     check_runnable, scene_label, summary_text, DetectorReport, EstimatorStats, Identified,

@@ -39,7 +39,7 @@ pub struct PlotData {
 
 /// Min/max decimation of one series into fixed buckets of `bucket` samples.
 #[derive(Debug, Clone)]
-pub(super) struct Decimator {
+pub(crate) struct Decimator {
     bucket: u64,
     n: u64,
     lo: (f64, f64),
@@ -99,7 +99,7 @@ impl Decimator {
 }
 
 /// One sample's values of the plotted series.
-pub(super) struct PlotPoint {
+pub(crate) struct PlotPoint {
     /// Measured ü1.
     pub measured: f64,
     /// Predicted ü1.
@@ -113,7 +113,7 @@ pub(super) struct PlotPoint {
 }
 
 /// The plot window's series, collected sample by sample.
-pub(super) struct PlotCollector {
+pub(crate) struct PlotCollector {
     window: (f64, f64),
     measured: Decimator,
     predicted: Decimator,
@@ -148,6 +148,27 @@ impl PlotCollector {
             self.truth.push(t, p.truth);
             self.slip_measured.push(t, p.slip_measured);
             self.slip_truth.push(t, p.slip_truth);
+        }
+    }
+
+    /// The series of a replay (no truth: its series are empty), with the `detected` events in
+    /// the window, each with the measured slip at its detection (m).
+    pub fn finish_measured(self, detected: &[(EventMark, f64)], scene: &str) -> PlotData {
+        let (from, to) = self.window;
+        PlotData {
+            window: self.window,
+            measured: self.measured.finish(),
+            predicted: self.predicted.finish(),
+            truth: Vec::new(),
+            slip_measured: self.slip_measured.finish(),
+            slip_truth: Vec::new(),
+            detected: detected
+                .iter()
+                .filter(|(e, _)| e.time_s >= from && e.time_s <= to)
+                .copied()
+                .collect(),
+            true_events: Vec::new(),
+            scene: scene.to_string(),
         }
     }
 
