@@ -298,6 +298,7 @@ pub fn replay<W: Write>(
             pipe.oscillator(),
             pipe.static_friction(),
             pipe.offsets(),
+            (model == Model::StickSlip).then(|| pipe.gain_mismatch()),
         ),
         events: EventCounts {
             slip_starts: count("slip_start"),
