@@ -108,7 +108,7 @@ fn check_common(v: &Value, samples: u64) {
     assert!(num(v, "board_ram_bytes") <= 8.0 * 1024.0);
     // The model as the pipeline runs it, all identification on, against the budget of
     // 50 instructions per steady sample (reported, not met yet by the fuse-mode stick-slip and
-    // fixed-base models: measured 94.8 (El Centro 95.1) and 84.3; rectangular 22.9). Bounded a little above the
+    // fixed-base models: measured 96.8 and 88.3; rectangular 22.9). Bounded a little above the
     // measured figures, so a regression fails.
     let model = num(v, "instructions_per_steady_sample_model");
     println!(

@@ -31,7 +31,6 @@ pub struct StickSlipModel<const H: usize, const EVENTS: bool = true> {
     top: [f32; BATCH],
     /// The base acceleration (for the tuning).
     base: [f32; BATCH],
-    pred: [f32; BATCH],
     /// f and ξ identified and adopted online (fuse mode).
     tuning: Option<Tuning>,
     /// Fuse mode: the breakaway coefficients read the measured top acceleration (else the
@@ -64,7 +63,6 @@ impl<const H: usize, const EVENTS: bool> StickSlipModel<H, EVENTS> {
             table: [0.0; BATCH],
             top: [0.0; BATCH],
             base: [0.0; BATCH],
-            pred: [0.0; BATCH],
             tuning: None,
             fuse: true,
             breakaways: Breakaways::default(),
@@ -151,10 +149,12 @@ impl<const H: usize, const EVENTS: bool> Model for StickSlipModel<H, EVENTS> {
     #[inline(always)]
     fn predict_run(&mut self, frames: &mut [Frame], from: usize) {
         let to = from + frames.len();
+        // The run's predictions (on the stack: static RAM is the board's budget).
+        let mut out = [0.0f32; BATCH];
         let (Some(table), Some(top), Some(pred)) = (
             self.table.get(from..to),
             self.top.get(from..to),
-            self.pred.get_mut(from..to),
+            out.get_mut(..frames.len()),
         ) else {
             return;
         };
