@@ -11,6 +11,7 @@
 //! * [`run`]: the main job: truth, sensors, the pipeline (detector and the f32 estimator), sample
 //!   by sample, streamed to CSV, with error and detection statistics.
 //! * [`replay`]: a recorded test (a scene's `[recording]` CSV) through the same pipeline as `run`.
+//! * [`monitor`]: the firmware's defmt stream decoded as it arrives into `replay`'s CSV.
 //! * [`qemu`]: `host-sim qemu`, the firmware under QEMU, every prediction against the host's run
 //!   of the same pipeline and a full-precision reference.
 //! * [`report`]: the data of `bench` (speed against error of every method) and `reproduce` (the
@@ -22,6 +23,7 @@
 pub mod cmd;
 pub mod methods;
 pub mod model;
+pub mod monitor;
 pub mod pipeline;
 pub mod plot;
 pub mod qemu;

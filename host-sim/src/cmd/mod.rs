@@ -1,7 +1,8 @@
 //! The `host-sim` command line: the commands ([`Cli`], parsed by clap) and one module per command
 //! with its arguments and handler.
 //!
-//! * [`replay`]: a recorded test through the same pipeline.
+//! * [`replay`]: a recorded test through the same pipeline; [`monitor`]: the firmware's live
+//!   defmt stream decoded into the same CSV.
 //! * [`run`]: the main job (also `host-sim` with no command); [`qemu`]: the firmware under QEMU.
 //! * [`peak`], [`trace`], [`check`]: the methods on one scene ([`crate::methods`]).
 //! * [`bench`](mod@bench): speed against error of every method; [`reproduce`]: the paper's
@@ -9,6 +10,7 @@
 
 pub mod bench;
 pub mod check;
+pub mod monitor;
 pub mod peak;
 pub mod qemu;
 pub mod replay;
@@ -41,6 +43,10 @@ enum Command {
     /// through the controller's pipeline, sample by sample; stream a CSV row per sample with the
     /// predicted ü1 and the detected events, and print a summary.
     Replay(replay::ReplayArgs),
+    /// Decode the firmware's raw defmt stream (probe-rs RTT, a serial dump, QEMU's stdout;
+    /// stdin by default) with the ELF's table and write replay's CSV as the frames arrive, with
+    /// a live summary on a terminal; damaged or lost frames are reported and skipped.
+    Monitor(monitor::MonitorArgs),
     /// Steady-state peak of |ü1| of a harmonic scene by the trapezoid or rectangular Fourier method.
     Peak(peak::PeakArgs),
     /// CSV trace `t_s,top_accel_m_s2` of the top-mass acceleration ü1 at the scene's samples.
@@ -71,6 +77,7 @@ impl Cli {
             None => run::command(run::RunArgs::default()),
             Some(Command::Run(args)) => run::command(args),
             Some(Command::Replay(args)) => replay::command(args),
+            Some(Command::Monitor(args)) => monitor::command(args),
             Some(Command::Peak(args)) => peak::command(args),
             Some(Command::Trace(args)) => trace::command(args),
             Some(Command::Check(args)) => check::command(args),

@@ -21,9 +21,19 @@ pub struct QemuArgs {
     /// Print one JSON object.
     #[arg(long)]
     pub json: bool,
+    /// Also write the raw defmt stream QEMU produced (its stdout, before decoding) to FILE, for
+    /// `host-sim monitor --elf <the report's elf> --input FILE`.
+    #[arg(long, value_name = "FILE")]
+    pub stream_out: Option<PathBuf>,
 }
 
 /// `host-sim qemu`.
 pub fn command(args: QemuArgs) -> Result<()> {
-    crate::qemu::command(args.scene.as_deref(), args.json, args.model, args.mode)
+    crate::qemu::command(
+        args.scene.as_deref(),
+        args.json,
+        args.model,
+        args.mode,
+        args.stream_out.as_deref(),
+    )
 }

@@ -159,6 +159,9 @@ pub struct QemuReport {
     pub scene: String,
     /// Scene file (None: the built-in default).
     pub scene_file: Option<PathBuf>,
+    /// The QEMU image that ran (absolute; kept after the run by [`image::keep_image`], so
+    /// `host-sim monitor --elf` can decode the stream `--stream-out` saved).
+    pub elf: PathBuf,
     /// The estimator model built into the firmware (`fixed-base`, `rectangular`, `stick-slip`).
     pub model: &'static str,
     /// What the model may read: `fuse` (every channel) or `predict` (never the top
@@ -347,6 +350,18 @@ pub fn run_scene_mode(
     model: Option<Model>,
     mode: Mode,
 ) -> Result<QemuReport> {
+    run_scene_stream(scene, firmware_dir, model, mode, None)
+}
+
+/// [`run_scene_mode`], also writing the raw defmt stream QEMU produced (its stdout, before
+/// decoding) to `stream_out` when given (`host-sim qemu --stream-out`).
+pub fn run_scene_stream(
+    scene: &Scene,
+    firmware_dir: &Path,
+    model: Option<Model>,
+    mode: Mode,
+    stream_out: Option<&Path>,
+) -> Result<QemuReport> {
     image::require_qemu()?;
     let mut timing = Timings::default();
     let gmu = scene.gmu();
@@ -370,12 +385,17 @@ pub fn run_scene_mode(
     slog::write(&log, &slog::header_for(scene, 0, samples.len())?, &samples)?;
     let images = image::build_for_scene_mode(firmware_dir, scene, model, mode, &dir.0, true)?;
     timing.build_s = images.build_s;
-    let elf = &images.qemu_elf;
+    let kept = image::keep_image(firmware_dir, &images.qemu_elf)?;
+    let elf = &kept;
 
     let t0 = Instant::now();
     let timeout = Duration::from_secs(120) + Duration::from_micros(500) * samples.len() as u32;
     let bytes = image::run_qemu(elf, &log, timeout)?;
     timing.qemu_s = t0.elapsed().as_secs_f64();
+    if let Some(path) = stream_out {
+        std::fs::write(path, &bytes)
+            .with_context(|| format!("cannot write the stream to {}", path.display()))?;
+    }
 
     let t0 = Instant::now();
     let frames = decode::decode(elf, &bytes)?;
@@ -499,6 +519,7 @@ pub fn run_scene_mode(
     Ok(QemuReport {
         scene: scene.name.clone(),
         scene_file: scene.source.clone(),
+        elf: kept.clone(),
         model: model.name(),
         mode: mode.name(),
         model_reason,

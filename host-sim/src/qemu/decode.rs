@@ -124,8 +124,8 @@ fn value(ty: &Type, shown: &str) -> Value {
     }
 }
 
-/// A decoded defmt frame as a [`Message`].
-fn message(f: &defmt_decoder::Frame<'_>) -> Message {
+/// A decoded defmt frame as a [`Message`] (its fields by key and type).
+pub fn message(f: &defmt_decoder::Frame<'_>) -> Message {
     let mut literal = String::new();
     let mut fields = Vec::new();
     let mut head: Option<String> = None;
@@ -162,13 +162,18 @@ fn message(f: &defmt_decoder::Frame<'_>) -> Message {
     }
 }
 
-/// Decode a defmt byte stream with the interning table of `elf`.
-pub fn decode(elf: &Path, bytes: &[u8]) -> Result<Vec<Message>> {
+/// The defmt interning table of the ELF `elf` (errors name the file).
+pub fn table(elf: &Path) -> Result<defmt_decoder::Table> {
     let image =
         std::fs::read(elf).with_context(|| format!("cannot read the ELF {}", elf.display()))?;
-    let table = defmt_decoder::Table::parse(&image)
+    defmt_decoder::Table::parse(&image)
         .with_context(|| format!("cannot read the defmt table of {}", elf.display()))?
-        .ok_or_else(|| anyhow!("{} has no defmt data", elf.display()))?;
+        .ok_or_else(|| anyhow!("{} has no defmt data", elf.display()))
+}
+
+/// Decode a defmt byte stream with the interning table of `elf`.
+pub fn decode(elf: &Path, bytes: &[u8]) -> Result<Vec<Message>> {
+    let table = table(elf)?;
     let mut decoder = table.new_stream_decoder();
     let mut out = Vec::new();
     // Fed in chunks: the stream decoder drains its buffer from the front, which is quadratic in

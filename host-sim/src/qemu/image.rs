@@ -311,6 +311,34 @@ pub fn build_for_scene_mode(
     })
 }
 
+/// Keep a copy of the QEMU image `elf` that outlives the run, so its defmt table can decode a
+/// saved stream later (`host-sim monitor --elf`): `firmware/target/host-sim/images/
+/// ssvr-qemu-<FNV-1a 64 of the ELF>.elf` (absolute), named by its content so that parallel runs
+/// of the same image share one file and a rebuilt image never overwrites an older one; written
+/// to a temporary name and renamed into place. `cargo clean` in `firmware/` removes them.
+pub fn keep_image(firmware_dir: &Path, elf: &Path) -> Result<PathBuf> {
+    let bytes =
+        std::fs::read(elf).with_context(|| format!("cannot read the ELF {}", elf.display()))?;
+    let hash = bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
+    });
+    let dir = firmware_dir.join("target").join("host-sim").join("images");
+    std::fs::create_dir_all(&dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    let kept = dir.join(format!("{QEMU_BIN}-{hash:016x}.elf"));
+    if std::fs::read(&kept).ok().as_deref() != Some(bytes.as_slice()) {
+        let nanos = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map(|d| d.as_nanos())
+            .unwrap_or(0);
+        let tmp = dir.join(format!(".{QEMU_BIN}-{}-{nanos}.tmp", std::process::id()));
+        std::fs::write(&tmp, &bytes).with_context(|| format!("cannot write {}", tmp.display()))?;
+        std::fs::rename(&tmp, &kept)
+            .with_context(|| format!("cannot rename {} to {}", tmp.display(), kept.display()))?;
+    }
+    kept.canonicalize()
+        .with_context(|| format!("no image at {}", kept.display()))
+}
+
 fn tail(s: &str, lines: usize) -> String {
     let v: Vec<&str> = s.lines().collect();
     v[v.len().saturating_sub(lines)..].join("\n")

@@ -18,6 +18,7 @@ pub mod reference;
 pub mod report;
 
 pub use check::{
-    measure_instruction_counts, run_scene, run_scene_mode, run_scene_model, QemuReport,
+    measure_instruction_counts, run_scene, run_scene_mode, run_scene_model, run_scene_stream,
+    QemuReport,
 };
 pub use report::{command, print_report};

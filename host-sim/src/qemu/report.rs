@@ -2,7 +2,7 @@
 //! command itself ([`command`]), which fails unless every goal is met.
 
 use super::check::{
-    run_scene_mode, QemuReport, GOAL_MODEL_INSTRUCTIONS_PER_SAMPLE, GOAL_REFERENCE_GMU,
+    run_scene_stream, QemuReport, GOAL_MODEL_INSTRUCTIONS_PER_SAMPLE, GOAL_REFERENCE_GMU,
     HOST_TOLERANCE_GMU,
 };
 use super::image;
@@ -162,6 +162,7 @@ pub fn print_report(r: &QemuReport, out: &mut impl Write) -> std::io::Result<()>
         r.ram_bytes,
         r.stack_bytes.map_or_else(|| "-".into(), |s| s.to_string())
     )?;
+    writeln!(out, "  image: {}", r.elf.display())?;
     writeln!(
         out,
         "  time: simulate {:.1} s, build {:.1} s, qemu {:.1} s, compare {:.1} s",
@@ -180,16 +181,29 @@ pub fn print_report(r: &QemuReport, out: &mut impl Write) -> std::io::Result<()>
     )
 }
 
-/// `host-sim qemu [SCENE] [--model MODEL] [--json]`: load the scene (None or `default`: the
-/// built-in default), run [`run_scene_model`] with `firmware/` next to host-sim, print the
-/// report, and fail when the firmware differs from the host.
-pub fn command(scene: Option<&Path>, json: bool, model: Option<Model>, mode: Mode) -> Result<()> {
+/// `host-sim qemu [SCENE] [--model MODEL] [--json] [--stream-out FILE]`: load the scene (None
+/// or `default`: the built-in default), run [`run_scene_stream`] with `firmware/` next to
+/// host-sim (saving the raw stream to `stream_out`), print the report, and fail when the
+/// firmware differs from the host.
+pub fn command(
+    scene: Option<&Path>,
+    json: bool,
+    model: Option<Model>,
+    mode: Mode,
+    stream_out: Option<&Path>,
+) -> Result<()> {
     let scene = match scene {
         None => Scene::default_scene(),
         Some(p) if p == Path::new("default") && !p.exists() => Scene::default_scene(),
         Some(p) => Scene::load(p)?,
     };
-    let report = run_scene_mode(&scene, &image::default_firmware_dir(), model, mode)?;
+    let report = run_scene_stream(
+        &scene,
+        &image::default_firmware_dir(),
+        model,
+        mode,
+        stream_out,
+    )?;
     let mut out = std::io::stdout().lock();
     if json {
         let s = serde_json::to_string_pretty(&report).context("serialising the report")?;

@@ -138,9 +138,31 @@ pub fn choose(
     Ok((model, why, mode))
 }
 
-/// The running comparison of the prediction with the measured top acceleration.
+/// One row of [`CSV_HEADER`], without its newline: the time `t` (s), the `measured` channels
+/// (table, base, top, displacement; empty cells for `None`) and the frame's prediction, event
+/// and flags. `replay` and `monitor` both write their rows with it.
+pub fn csv_row(t: f64, measured: &[Option<f32>; 4], frame: &Frame) -> String {
+    let mut line = format!("{}", Num(t));
+    for m in measured {
+        line.push(',');
+        if let Some(v) = m {
+            line.push_str(&Num(*v).to_string());
+        }
+    }
+    line.push_str(&format!(",{},", Num(frame.prediction)));
+    if let Some(e) = frame.event {
+        line.push_str(&format!("{},{}", e.kind.name(), e.age_samples));
+    } else {
+        line.push(',');
+    }
+    line.push_str(&format!(",{}", frame.flags));
+    line
+}
+
+/// The running comparison of the prediction with the measured top acceleration (samples
+/// neither missing nor saturated, both finite).
 #[derive(Debug, Default)]
-struct Compare {
+pub(crate) struct Compare {
     n: u64,
     sum_sq: f64,
     max_err: f64,
@@ -149,7 +171,7 @@ struct Compare {
 }
 
 impl Compare {
-    fn add(&mut self, measured: f32, predicted: f32, fl: u8) {
+    pub(crate) fn add(&mut self, measured: f32, predicted: f32, fl: u8) {
         let (m, p) = (f64::from(measured), f64::from(predicted));
         if p.is_finite() {
             self.peak_predicted = self.peak_predicted.max(p.abs());
@@ -164,7 +186,7 @@ impl Compare {
         self.peak_measured = self.peak_measured.max(m.abs());
     }
 
-    fn report(&self) -> VsMeasured {
+    pub(crate) fn report(&self) -> VsMeasured {
         let rms = if self.n > 0 {
             (self.sum_sq / self.n as f64).sqrt()
         } else {
@@ -202,20 +224,7 @@ impl<W: Write> Out<W> {
     }
 
     fn row(&mut self, item: &Item, frame: &Frame) -> Result<()> {
-        let mut line = format!("{}", Num(item.t));
-        for m in item.measured {
-            line.push(',');
-            if let Some(v) = m {
-                line.push_str(&Num(v).to_string());
-            }
-        }
-        line.push_str(&format!(",{},", Num(frame.prediction)));
-        if let Some(e) = frame.event {
-            line.push_str(&format!("{},{}", e.kind.name(), e.age_samples));
-        } else {
-            line.push(',');
-        }
-        writeln!(self.out, "{line},{}", frame.flags).map_err(|e| self.io(e))?;
+        writeln!(self.out, "{}", csv_row(item.t, &item.measured, frame)).map_err(|e| self.io(e))?;
         self.rows += 1;
         Ok(())
     }

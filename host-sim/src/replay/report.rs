@@ -4,7 +4,7 @@ use crate::run::Identified;
 use serde::Serialize;
 
 /// Detected friction events.
-#[derive(Debug, Clone, Copy, Serialize)]
+#[derive(Debug, Clone, Copy, Default, Serialize)]
 pub struct EventCounts {
     /// Slip starts.
     pub slip_starts: usize,
