@@ -307,6 +307,29 @@ fn a_non_increasing_time_is_an_error_naming_the_line() {
     );
 }
 
+/// The same with CRLF line ends (a Windows logger's): the line named is still the file's.
+#[test]
+fn a_non_increasing_time_names_the_line_with_crlf_line_ends() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut text = String::from("t,a,top\r\n");
+    for k in 0..50 {
+        text += &format!("{},0.1,0.2\r\n", k as f64 / 1000.0);
+    }
+    text += "0.049,0.1,0.2\r\n"; // line 52
+    write(dir.path(), "x.csv", &text);
+    let rep = write(dir.path(), "x.toml", &replay_scene("x.csv", SMALL_COLUMNS));
+    let out = host_sim()
+        .args(["replay", rep.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("x.csv:52:") && err.contains("(line 51:"),
+        "{err}"
+    );
+}
+
 #[test]
 fn text_cells_and_time_gaps_are_flagged_samples() {
     let dir = tempfile::tempdir().unwrap();

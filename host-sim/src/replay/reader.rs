@@ -250,7 +250,9 @@ impl Reader {
         if !more {
             return Ok(None);
         }
-        let line = position_line(&self.record);
+        // The csv crate's line is one short after CRLF line ends (a Windows logger's); the
+        // header plus the rows read is right unless blank lines were skipped: the larger.
+        let line = position_line(&self.record).max(self.counts.rows + 2);
         self.counts.rows += 1;
         let time = match &self.time_col {
             Some((i, _)) => {
