@@ -1,5 +1,5 @@
 //! The streaming side: each queued frame as a defmt message ([`drain`],
-//! `ssvr_proto::stream::emit_frame`), and the identified μ ([`emit_mu`]).
+//! `ssvr_proto::stream::emit_frame`), and the identified μ, f and ξ ([`emit_mu`]).
 
 use crate::plan::ImagePipeline;
 use heapless::spsc::Consumer;
@@ -16,7 +16,8 @@ pub fn drain(consumer: &mut Consumer<'_, Frame>) -> u32 {
 }
 
 /// Report the identified friction coefficient: `mu estimate=.. std=.. samples=..`, or `mu none`
-/// (models that identify μ only).
+/// (models that identify μ only), then the f and ξ in use: `osc f_hz=.. xi=.. adoptions=..`
+/// (models that identify them, fuse mode).
 pub fn emit_mu(pipe: &ImagePipeline) {
     use ssvr_proto::Model as _;
     if pipe.model().kind() == ssvr_proto::ModelKind::Rectangular {
@@ -30,5 +31,15 @@ pub fn emit_mu(pipe: &ImagePipeline) {
             m.blocks
         ),
         None => defmt::info!("mu none"),
+    }
+    // The top oscillator's f and ξ in use (fuse mode: identified online) and its adoptions:
+    // `osc f_hz=.. xi=.. adoptions=..`.
+    if let Some(o) = pipe.model().oscillator() {
+        defmt::info!(
+            "osc f_hz={=f64} xi={=f64} adoptions={=u32}",
+            o.natural_frequency_hz,
+            o.damping_ratio,
+            o.adoptions
+        );
     }
 }

@@ -111,6 +111,8 @@ fn monitor_decodes_the_qemu_stream_into_runs_predictions() {
     assert_eq!(m.len(), samples);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("0 malformed frames"), "{err}");
+    // The firmware's f in use (its `osc` message; fuse mode, the scene's 7 Hz).
+    assert!(err.contains(" f 7.0"), "{err}");
 
     // `run` on the same scene and model: the same pipeline.
     let r_csv = d.join("r.csv");

@@ -66,6 +66,11 @@ pub struct MonitorReport {
     pub mu_estimate: Option<f64>,
     /// Its standard deviation.
     pub mu_std: Option<f64>,
+    /// The natural frequency (Hz) the firmware's model uses: identified online in fuse mode (its
+    /// `osc` message; none for a model that does not identify it).
+    pub natural_frequency_hz: Option<f64>,
+    /// The damping ratio it uses.
+    pub damping_ratio: Option<f64>,
     /// The prediction against the top accelerometer the frames echo.
     pub vs_measured_top: Option<VsMeasured>,
     /// defmt frames that could not be decoded (corrupted in transit), skipped.
@@ -186,6 +191,11 @@ impl<W: Write> State<'_, W> {
             if let (Some(mu), Some(sd)) = (m.f64("estimate"), m.f64("std")) {
                 self.report.mu_estimate = Some(mu);
                 self.report.mu_std = Some(sd);
+            }
+        } else if m.name == "osc" {
+            if let (Some(f), Some(xi)) = (m.f64("f_hz"), m.f64("xi")) {
+                self.report.natural_frequency_hz = Some(f);
+                self.report.damping_ratio = Some(xi);
             }
         } else if matches!(m.level.as_deref(), Some("warn" | "error")) {
             self.report.firmware_errors += 1;
@@ -381,6 +391,9 @@ pub fn live_line(r: &MonitorReport) -> String {
     let mu = r
         .mu_estimate
         .map_or_else(|| "-".to_string(), |m| format!("{m:.5}"));
+    let f = r
+        .natural_frequency_hz
+        .map_or_else(|| "-".to_string(), |f| format!("{f:.4} Hz"));
     let vs = r.vs_measured_top.as_ref().map_or_else(
         || "-".to_string(),
         |v| {
@@ -393,7 +406,7 @@ pub fn live_line(r: &MonitorReport) -> String {
     let lost = r.malformed_frames + r.bad_samples + r.damaged_frames + r.lost_frames;
     format!(
         "monitor: {} samples{t}, events {}/{}/{} (slip starts/reversals/sticks), mu {mu}, \
-         f - (not streamed), pred-vs-top rms {vs}, lost {lost}",
+         f {f}, pred-vs-top rms {vs}, lost {lost}",
         r.samples, e.slip_starts, e.reversals, e.sticks
     )
 }
