@@ -133,16 +133,7 @@ impl ParseContext<'_> {
             )?),
             None => None,
         };
-        let gravity = match &raw.gravity_m_s2 {
-            Some(g) => self.check(
-                None,
-                "gravity_m_s2",
-                g,
-                *g.get_ref() > 0.0,
-                "gravity_m_s2 > 0 m/s^2",
-            )?,
-            None => STANDARD_GRAVITY,
-        };
+        let gravity = self.gravity(raw)?;
         let (structure, mu_s) = self.structure(structure_table, gravity, &raw.gravity_m_s2)?;
         let prior = self.estimator(raw.estimator.as_ref(), &structure, mu_s)?;
         let rate_v = &sampling.get_ref().rate_hz;
@@ -174,16 +165,9 @@ impl ParseContext<'_> {
             None => (None, 0.0),
         };
         let raw_sensors = raw.sensors.as_ref();
-        let sensors = match raw_sensors {
-            Some(s) => self.sensors(s)?,
-            None => Sensors::default(),
-        };
+        let sensors = self.sensors_or_default(raw_sensors)?;
         let board = self.board(raw.adc.as_ref(), raw_sensors, &sensors, rate)?;
-        let name = raw.name.clone().unwrap_or_else(|| {
-            self.origin
-                .file_stem()
-                .map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned())
-        });
+        let name = self.name(raw);
         Ok(Document {
             name,
             duration,
@@ -196,6 +180,29 @@ impl ParseContext<'_> {
             sensors,
             board,
             recording: None,
+        })
+    }
+
+    /// `gravity_m_s2` (> 0), or standard gravity.
+    fn gravity(&self, raw: &RawScene) -> Result<f64, SceneError> {
+        match &raw.gravity_m_s2 {
+            Some(g) => self.check(
+                None,
+                "gravity_m_s2",
+                g,
+                *g.get_ref() > 0.0,
+                "gravity_m_s2 > 0 m/s^2",
+            ),
+            None => Ok(STANDARD_GRAVITY),
+        }
+    }
+
+    /// `name`, or the file stem.
+    fn name(&self, raw: &RawScene) -> String {
+        raw.name.clone().unwrap_or_else(|| {
+            self.origin
+                .file_stem()
+                .map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned())
         })
     }
 
@@ -222,33 +229,17 @@ impl ParseContext<'_> {
                 ));
             }
         }
-        let gravity = match &raw.gravity_m_s2 {
-            Some(g) => self.check(
-                None,
-                "gravity_m_s2",
-                g,
-                *g.get_ref() > 0.0,
-                "gravity_m_s2 > 0 m/s^2",
-            )?,
-            None => STANDARD_GRAVITY,
-        };
+        let gravity = self.gravity(raw)?;
         let (structure, mu_s) = self.structure(structure_table, gravity, &raw.gravity_m_s2)?;
         let prior = self.estimator(raw.estimator.as_ref(), &structure, mu_s)?;
         let recording = self.recording(recording_table)?;
-        let sensors = match raw.sensors.as_ref() {
-            Some(s) => self.sensors(s)?,
-            None => Sensors::default(),
-        };
+        let sensors = self.sensors_or_default(raw.sensors.as_ref())?;
         let rate_hz = match recording.time {
             crate::recording::Timebase::Rate(r) => r,
             // Set from the time column when the file is read.
             crate::recording::Timebase::Column(_) => f64::NAN,
         };
-        let name = raw.name.clone().unwrap_or_else(|| {
-            self.origin
-                .file_stem()
-                .map_or_else(|| "scene".into(), |s| s.to_string_lossy().into_owned())
-        });
+        let name = self.name(raw);
         Ok(Document {
             name,
             duration: None,

@@ -97,6 +97,11 @@ impl RawSensors {
 }
 
 impl ParseContext<'_> {
+    /// The `[sensors]` table if there is one, else the defaults.
+    pub(crate) fn sensors_or_default(&self, r: Option<&RawSensors>) -> Result<Sensors, SceneError> {
+        r.map_or_else(|| Ok(Sensors::default()), |r| self.sensors(r))
+    }
+
     /// The `[sensors]` table.
     pub(crate) fn sensors(&self, r: &RawSensors) -> Result<Sensors, SceneError> {
         const S: Option<&str> = Some("sensors");

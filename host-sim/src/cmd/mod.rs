@@ -106,6 +106,27 @@ fn print_json<T: serde::Serialize>(value: &T) -> Result<()> {
         .context("writing the report")
 }
 
+/// The end of a command that writes a report: `--json` prints it, else its summary text (with
+/// the plot's path, when one was drawn) goes to standard output.
+fn print_report<T: serde::Serialize>(
+    report: &T,
+    json: bool,
+    summary: impl FnOnce(&T) -> String,
+    plot: Option<&std::path::Path>,
+) -> Result<()> {
+    if json {
+        return print_json(report);
+    }
+    let mut text = summary(report);
+    if let Some(p) = plot {
+        text += &format!("  plot: {}\n", p.display());
+    }
+    let mut o = std::io::stdout().lock();
+    o.write_all(text.as_bytes())
+        .and_then(|()| o.flush())
+        .context("writing the summary")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

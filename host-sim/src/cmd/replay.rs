@@ -1,13 +1,13 @@
 //! `host-sim replay`: the command-line glue of [`crate::replay`]: arguments, Ctrl-C, the progress
 //! bar and the summary or JSON report.
 
-use super::print_json;
+use super::print_report;
 use crate::plot;
 use crate::replay::{self, ReplayOptions};
 use crate::scene::ReplayScene;
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 use indicatif::{ProgressBar, ProgressStyle};
-use std::io::{IsTerminal, Write};
+use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
@@ -96,16 +96,10 @@ pub fn command(args: ReplayArgs) -> Result<()> {
         plot::render(data, path)?;
     }
     report.runtime_s = start.elapsed().as_secs_f64();
-    if args.json {
-        print_json(&report)
-    } else {
-        let mut text = replay::summary_text(&report);
-        if let Some(p) = &args.plot {
-            text += &format!("  plot: {}\n", p.display());
-        }
-        let mut o = std::io::stdout().lock();
-        o.write_all(text.as_bytes())
-            .and_then(|()| o.flush())
-            .context("writing the summary")
-    }
+    print_report(
+        &report,
+        args.json,
+        replay::summary_text,
+        args.plot.as_deref(),
+    )
 }

@@ -1,12 +1,11 @@
 //! `host-sim run` (also `host-sim` with no command): the command-line glue of [`crate::run`]:
 //! arguments, Ctrl-C, the optional figure ([`crate::plot::run`]) and the summary or JSON report.
 
-use super::{load, print_json};
+use super::{load, print_report};
 use crate::plot;
 use crate::run::{self, RunOptions, StickPolicy};
 use crate::scene::Scene;
-use anyhow::{bail, Context, Result};
-use std::io::Write;
+use anyhow::{bail, Result};
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
@@ -116,16 +115,5 @@ pub fn command(args: RunArgs) -> Result<()> {
         plot::render(data, path)?;
     }
     report.runtime_s = start.elapsed().as_secs_f64();
-    if args.json {
-        print_json(&report)
-    } else {
-        let mut text = run::summary_text(&report);
-        if let Some(p) = &args.plot {
-            text += &format!("  plot: {}\n", p.display());
-        }
-        let mut o = std::io::stdout().lock();
-        o.write_all(text.as_bytes())
-            .and_then(|()| o.flush())
-            .context("writing the summary")
-    }
+    print_report(&report, args.json, run::summary_text, args.plot.as_deref())
 }
