@@ -197,6 +197,19 @@ impl ParseContext<'_> {
         }
     }
 
+    /// A path given in the scene: as is if absolute, else relative to the scene file's folder.
+    pub(crate) fn relative_to_scene(&self, given: &str) -> std::path::PathBuf {
+        let rel = std::path::Path::new(given);
+        if rel.is_absolute() {
+            rel.to_path_buf()
+        } else {
+            self.origin
+                .parent()
+                .unwrap_or_else(|| std::path::Path::new(""))
+                .join(rel)
+        }
+    }
+
     /// `name`, or the file stem.
     fn name(&self, raw: &RawScene) -> String {
         raw.name.clone().unwrap_or_else(|| {

@@ -9,7 +9,6 @@ use crate::units::Units;
 use serde::Deserialize;
 use ssvr_core::ReversalTrain;
 use std::ops::Range;
-use std::path::Path;
 use toml::Spanned;
 
 /// A prescribed friction train (scene `kind = "reversals"`): F = level·μ(m1+m2)g, the level jumping to
@@ -279,15 +278,7 @@ impl ParseContext<'_> {
                     Some(v) => self.check(S, "scale", v, true, "a finite number")?,
                     None => 1.0,
                 };
-                let rel = Path::new(file.get_ref().as_str());
-                let path = if rel.is_absolute() {
-                    rel.to_path_buf()
-                } else {
-                    self.origin
-                        .parent()
-                        .unwrap_or_else(|| Path::new(""))
-                        .join(rel)
-                };
+                let path = self.relative_to_scene(file.get_ref());
                 let referenced = format!(
                     "{}:{}",
                     self.origin.display(),

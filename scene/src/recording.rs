@@ -157,15 +157,7 @@ impl ParseContext<'_> {
                 "[recording] file must name a CSV file".into(),
             ));
         }
-        let rel = Path::new(given.as_str());
-        let file = if rel.is_absolute() {
-            rel.to_path_buf()
-        } else {
-            self.origin
-                .parent()
-                .unwrap_or_else(|| Path::new(""))
-                .join(rel)
-        };
+        let file = self.relative_to_scene(given);
         Ok(Recording {
             file,
             file_as_given: given.clone(),
