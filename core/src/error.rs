@@ -67,6 +67,10 @@ pub enum Param {
     History,
     /// The stuck-phase observer's bandwidth (units of p).
     ObserverBandwidth,
+    /// The friction coefficient of a velocity-dependent law as the slip speed goes to 0.
+    MuSlow,
+    /// The rate `a` (s/m) of a velocity-dependent friction law.
+    FrictionRate,
 }
 
 impl Param {
@@ -104,6 +108,8 @@ impl Param {
             Param::IdentifyEvery => "identification block length",
             Param::History => "history",
             Param::ObserverBandwidth => "observer bandwidth",
+            Param::MuSlow => "slow friction coefficient",
+            Param::FrictionRate => "friction rate",
         }
     }
 }

@@ -18,6 +18,7 @@
 //!   ([`detect::displacement`]), or from the slip acceleration (base minus table accelerometer,
 //!   [`detect::acceleration`]).
 //! * [`stick_slip`]: the stick-slip aware estimator with online friction identification.
+//! * [`friction`]: the friction law of the sliding interface (Coulomb, or velocity-dependent).
 //!
 //! The library is `#![no_std]`, allocates nothing and never panics on any input: every fallible
 //! operation returns a typed [`Error`].
@@ -34,6 +35,7 @@ extern crate std;
 pub mod closed_form;
 pub mod detect;
 pub mod error;
+pub mod friction;
 pub mod math;
 pub mod oscillator_id;
 pub mod recursion;
@@ -42,4 +44,5 @@ pub mod structure;
 
 pub use closed_form::duhamel::{Reversal, ReversalTrain};
 pub use error::{Error, Param};
+pub use friction::FrictionLaw;
 pub use structure::{Regime, Structure, StructureParams};

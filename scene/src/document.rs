@@ -12,6 +12,7 @@
 use crate::board::{BoardSettings, RawAdc};
 use crate::error::SceneError;
 use crate::estimator::{Prior, RawEstimator};
+use crate::friction::RawFriction;
 use crate::input::{Input, RawInput};
 use crate::parse::ParseContext;
 use crate::recording::{RawRecording, Recording};
@@ -20,7 +21,7 @@ use crate::sensors::{RawSensors, Sensors};
 use crate::structure::RawStructure;
 use serde::Deserialize;
 use ssvr_core::structure::STANDARD_GRAVITY;
-use ssvr_core::Structure;
+use ssvr_core::{FrictionLaw, Structure};
 use std::path::Path;
 use toml::Spanned;
 
@@ -42,6 +43,7 @@ pub(crate) struct RawScene {
     duration_s: Option<Spanned<f64>>,
     gravity_m_s2: Option<Spanned<f64>>,
     structure: Option<Spanned<RawStructure>>,
+    friction: Option<Spanned<RawFriction>>,
     estimator: Option<Spanned<RawEstimator>>,
     input: Option<Spanned<RawInput>>,
     sampling: Option<Spanned<RawSampling>>,
@@ -79,6 +81,7 @@ pub(crate) struct Document {
     pub(crate) rate_hz: f64,
     pub(crate) structure: Structure,
     pub(crate) static_friction_coefficient: f64,
+    pub(crate) friction: FrictionLaw,
     pub(crate) prior: Prior,
     pub(crate) input: Option<Input>,
     pub(crate) start_s: f64,
@@ -134,8 +137,13 @@ impl ParseContext<'_> {
             None => None,
         };
         let gravity = self.gravity(raw)?;
-        let (structure, mu_s) = self.structure(structure_table, gravity, &raw.gravity_m_s2)?;
-        let prior = self.estimator(raw.estimator.as_ref(), &structure, mu_s)?;
+        let (structure, mu_s, friction) = self.structure(
+            structure_table,
+            raw.friction.as_ref(),
+            gravity,
+            &raw.gravity_m_s2,
+        )?;
+        let prior = self.estimator(raw.estimator.as_ref(), &structure, mu_s, friction)?;
         let rate_v = &sampling.get_ref().rate_hz;
         let rate = self.check(
             Some("sampling"),
@@ -174,6 +182,7 @@ impl ParseContext<'_> {
             rate_hz: rate,
             structure,
             static_friction_coefficient: mu_s,
+            friction,
             prior,
             input,
             start_s,
@@ -243,8 +252,13 @@ impl ParseContext<'_> {
             }
         }
         let gravity = self.gravity(raw)?;
-        let (structure, mu_s) = self.structure(structure_table, gravity, &raw.gravity_m_s2)?;
-        let prior = self.estimator(raw.estimator.as_ref(), &structure, mu_s)?;
+        let (structure, mu_s, friction) = self.structure(
+            structure_table,
+            raw.friction.as_ref(),
+            gravity,
+            &raw.gravity_m_s2,
+        )?;
+        let prior = self.estimator(raw.estimator.as_ref(), &structure, mu_s, friction)?;
         let recording = self.recording(recording_table)?;
         let sensors = self.sensors_or_default(raw.sensors.as_ref())?;
         let rate_hz = match recording.time {
@@ -259,6 +273,7 @@ impl ParseContext<'_> {
             rate_hz,
             structure,
             static_friction_coefficient: mu_s,
+            friction,
             prior,
             input: None,
             start_s: recording.start_s,

@@ -7,7 +7,7 @@
 use crate::error::SceneError;
 use crate::parse::{core_message, ParseContext};
 use serde::Deserialize;
-use ssvr_core::{Param, Structure, StructureParams};
+use ssvr_core::{FrictionLaw, Param, Structure, StructureParams};
 use toml::Spanned;
 
 #[derive(Deserialize)]
@@ -27,16 +27,24 @@ pub(crate) struct RawEstimator {
 pub struct Prior {
     /// Masses, natural frequency, damping ratio, kinetic friction coefficient, gravity.
     pub params: StructureParams,
-    /// Static friction coefficient (≥ the kinetic one).
+    /// Static friction coefficient (≥ the kinetic one at rest).
     pub static_friction_coefficient: f64,
+    /// The friction law of the interface (`[friction]`; its μ_fast is `params`'
+    /// friction coefficient).
+    pub friction: FrictionLaw,
 }
 
 impl Prior {
     /// The prior that is the specimen itself (no `[estimator]` table).
-    pub fn exact(structure: &Structure, static_friction_coefficient: f64) -> Self {
+    pub fn exact(
+        structure: &Structure,
+        static_friction_coefficient: f64,
+        friction: FrictionLaw,
+    ) -> Self {
         Self {
             params: *structure.params(),
             static_friction_coefficient,
+            friction,
         }
     }
 }
@@ -48,10 +56,11 @@ impl ParseContext<'_> {
         table: Option<&Spanned<RawEstimator>>,
         structure: &Structure,
         mu_s: f64,
+        friction: FrictionLaw,
     ) -> Result<Prior, SceneError> {
         const S: Option<&str> = Some("estimator");
         let Some(table) = table else {
-            return Ok(Prior::exact(structure, mu_s));
+            return Ok(Prior::exact(structure, mu_s, friction));
         };
         let r = table.get_ref();
         let base = structure.params();
@@ -105,14 +114,25 @@ impl ParseContext<'_> {
             };
             self.err(span, core_message(key, value, &e))
         })?;
-        let mu = prior.mu();
+        if let FrictionLaw::VelocityDependent { mu_slow, .. } = friction {
+            if let Some(v) = &r.friction_coefficient {
+                self.check(
+                    S,
+                    "friction_coefficient",
+                    v,
+                    *v.get_ref() >= mu_slow,
+                    "friction_coefficient >= [friction] mu_slow",
+                )?;
+            }
+        }
+        let mu = friction.at_rest(prior.mu());
         let static_friction_coefficient = match &r.static_friction_coefficient {
             Some(v) => self.check(
                 S,
                 "static_friction_coefficient",
                 v,
                 *v.get_ref() >= mu,
-                "static_friction_coefficient >= the estimator's friction_coefficient",
+                "static_friction_coefficient >= the estimator's friction coefficient at rest",
             )?,
             None if mu_s >= mu => mu_s,
             None => mu,
@@ -120,6 +140,7 @@ impl ParseContext<'_> {
         Ok(Prior {
             params: *prior.params(),
             static_friction_coefficient,
+            friction,
         })
     }
 }

@@ -12,7 +12,11 @@
 //! natural_frequency_hz = 7.0         # or natural_period_s (exactly one of the two)
 //! damping_ratio = 0.05
 //! friction_coefficient = 0.2
-//! static_friction_coefficient = 0.25 # optional, >= friction_coefficient
+//! static_friction_coefficient = 0.25 # optional, >= friction_coefficient ([friction] mu_slow)
+//! [friction]                         # optional; without it Coulomb friction
+//! law = "velocity-dependent"         # or "coulomb"
+//! mu_slow = 0.12                     # mu(v) = mu_fast - (mu_fast - mu_slow) exp(-rate_s_m |v|)
+//! rate_s_m = 30.0                    # mu_fast = friction_coefficient
 //! [input]
 //! kind = "harmonic"                  # amplitude_m_s2 * sin(2*pi*t/period_s)
 //! amplitude_m_s2 = 2.0
@@ -53,6 +57,7 @@ mod board;
 mod document;
 mod error;
 mod estimator;
+mod friction;
 mod input;
 mod parse;
 mod record;

@@ -198,6 +198,8 @@ pub struct ReplayScene {
     pub structure: ssvr_core::Structure,
     /// Static friction coefficient μs ≥ μ.
     pub static_friction_coefficient: f64,
+    /// The friction law of the interface (`[friction]`; Coulomb without it).
+    pub friction: ssvr_core::FrictionLaw,
     /// The estimator's prior (`[estimator]`; the specimen itself without it).
     pub estimator: crate::Prior,
     /// Sensor models (their noise levels set the detector's thresholds).
@@ -227,6 +229,7 @@ impl ReplayScene {
             source: origin.to_path_buf(),
             structure: doc.structure,
             static_friction_coefficient: doc.static_friction_coefficient,
+            friction: doc.friction,
             estimator: doc.prior,
             sensors: doc.sensors,
             recording,
@@ -242,6 +245,7 @@ impl ReplayScene {
             source: Some(self.source.clone()),
             structure: self.structure,
             static_friction_coefficient: self.static_friction_coefficient,
+            friction: self.friction,
             gravity_m_s2: self.structure.g(),
             rate_hz,
             sensors: self.sensors.clone(),

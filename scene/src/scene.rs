@@ -9,7 +9,7 @@ use crate::parse::ParseContext;
 use crate::sensors::Sensors;
 use crate::table_motion::TableMotion;
 use ssvr_core::structure::STANDARD_GRAVITY;
-use ssvr_core::{ReversalTrain, Structure, StructureParams};
+use ssvr_core::{FrictionLaw, ReversalTrain, Structure, StructureParams};
 use std::path::{Path, PathBuf};
 
 /// Largest sample count a scene may ask for (2^53: every index is exact in f64).
@@ -30,8 +30,10 @@ pub struct Scene {
     pub samples: u64,
     /// The structure (its gravity is the scene's `gravity_m_s2`).
     pub structure: Structure,
-    /// Static friction coefficient μs ≥ μ.
+    /// Static friction coefficient μs ≥ μ (≥ μ_slow for a velocity-dependent law).
     pub static_friction_coefficient: f64,
+    /// The friction law of the interface (`[friction]`; Coulomb without it).
+    pub friction: FrictionLaw,
     /// The estimator's prior (`[estimator]`; the specimen itself without it).
     pub estimator: Prior,
     /// The table at rest until then (s, `[input] start_s`; 0: the input starts at once).
@@ -68,7 +70,8 @@ impl Scene {
             samples: 100_000,
             structure,
             static_friction_coefficient: 0.2,
-            estimator: Prior::exact(&structure, 0.2),
+            friction: FrictionLaw::Coulomb,
+            estimator: Prior::exact(&structure, 0.2, FrictionLaw::Coulomb),
             start_s: 0.0,
             input: Input::Harmonic {
                 amplitude_m_s2: 2.0,
@@ -102,6 +105,7 @@ impl Scene {
             samples,
             structure: doc.structure,
             static_friction_coefficient: doc.static_friction_coefficient,
+            friction: doc.friction,
             estimator: doc.prior,
             start_s: doc.start_s,
             input,

@@ -13,7 +13,7 @@ use crate::estimator::Prior;
 use crate::parse::ParseContext;
 use crate::scene::Scene;
 use crate::sensors::Sensors;
-use ssvr_core::Structure;
+use ssvr_core::{FrictionLaw, Structure};
 use std::path::{Path, PathBuf};
 
 /// A validated specimen: everything of a scene but its table motion.
@@ -26,8 +26,10 @@ pub struct Specimen {
     /// The structure (its gravity is the scene's `gravity_m_s2`; its parameters are
     /// [`Structure::params`]).
     pub structure: Structure,
-    /// Static friction coefficient μs ≥ μ.
+    /// Static friction coefficient μs ≥ μ (≥ μ_slow for a velocity-dependent law).
     pub static_friction_coefficient: f64,
+    /// The friction law of the interface (`[friction]`; Coulomb without it).
+    pub friction: FrictionLaw,
     /// Gravity (m/s²): `gravity_m_s2`, default standard gravity.
     pub gravity_m_s2: f64,
     /// Sample rate (Hz).
@@ -60,6 +62,7 @@ impl Specimen {
             gravity_m_s2: doc.structure.g(),
             structure: doc.structure,
             static_friction_coefficient: doc.static_friction_coefficient,
+            friction: doc.friction,
             rate_hz: doc.rate_hz,
             sensors: doc.sensors,
             board: doc.board,
@@ -77,6 +80,7 @@ impl From<&Scene> for Specimen {
             source: scene.source.clone(),
             structure: scene.structure,
             static_friction_coefficient: scene.static_friction_coefficient,
+            friction: scene.friction,
             gravity_m_s2: scene.structure.g(),
             rate_hz: scene.rate_hz,
             sensors: scene.sensors.clone(),

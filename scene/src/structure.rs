@@ -1,9 +1,10 @@
 //! The structure (`[structure]`): masses, natural frequency, damping and friction.
 
 use crate::error::SceneError;
+use crate::friction::RawFriction;
 use crate::parse::{core_message, ParseContext};
 use serde::Deserialize;
-use ssvr_core::{Param, Structure, StructureParams};
+use ssvr_core::{FrictionLaw, Param, Structure, StructureParams};
 use toml::Spanned;
 
 #[derive(Deserialize)]
@@ -20,13 +21,16 @@ pub(crate) struct RawStructure {
 
 impl ParseContext<'_> {
     /// The `[structure]` table: the structure (its gravity `gravity`, the document's
-    /// `gravity_m_s2` when given) and the static friction coefficient.
+    /// `gravity_m_s2` when given), the friction law (`[friction]`, over the structure's
+    /// coefficient) and the static friction coefficient (at least the law's coefficient at rest,
+    /// and that by default).
     pub(crate) fn structure(
         &self,
         table: &Spanned<RawStructure>,
+        friction: Option<&Spanned<RawFriction>>,
         gravity: f64,
         gravity_v: &Option<Spanned<f64>>,
-    ) -> Result<(Structure, f64), SceneError> {
+    ) -> Result<(Structure, f64, FrictionLaw), SceneError> {
         const S: Option<&str> = Some("structure");
         let r = table.get_ref();
         let (freq, freq_key, freq_v) =
@@ -94,17 +98,23 @@ impl ParseContext<'_> {
             };
             self.err(span, core_message(key, value, &e))
         })?;
-        let mu = structure.mu();
+        let law = self.friction(friction, structure.mu())?;
+        let at_rest = law.at_rest(structure.mu());
         let mu_s = match &r.static_friction_coefficient {
             Some(v) => self.check(
                 S,
                 "static_friction_coefficient",
                 v,
-                *v.get_ref() >= mu,
-                "static_friction_coefficient >= friction_coefficient",
+                *v.get_ref() >= at_rest,
+                match law {
+                    FrictionLaw::Coulomb => "static_friction_coefficient >= friction_coefficient",
+                    FrictionLaw::VelocityDependent { .. } => {
+                        "static_friction_coefficient >= [friction] mu_slow"
+                    }
+                },
             )?,
-            None => mu,
+            None => at_rest,
         };
-        Ok((structure, mu_s))
+        Ok((structure, mu_s, law))
     }
 }

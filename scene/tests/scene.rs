@@ -151,9 +151,9 @@ fn unknown_keys_are_named_with_their_line() {
 #[test]
 fn unknown_tables_are_named_at_their_header() {
     // A top-level table: no `[structure] unknown key` (the table before it).
-    let text = BASE.replace("[input]", "[friction]\nmu = 0.2\n[input]");
-    let e = error_at(&text, 9, &["unknown table `[friction]`"]);
-    assert!(e.message.starts_with("unknown table `[friction]`"), "{e}");
+    let text = BASE.replace("[input]", "[damper]\nmu = 0.2\n[input]");
+    let e = error_at(&text, 9, &["unknown table `[damper]`"]);
+    assert!(e.message.starts_with("unknown table `[damper]`"), "{e}");
     assert!(!e.message.contains("[structure]"), "{e}");
     // An array of tables.
     error_at(
