@@ -3,7 +3,7 @@
 
 use crate::table_motion::TableMotion;
 use core::fmt;
-use ssvr_core::Structure;
+use ssvr_core::{FrictionLaw, Structure};
 
 /// Inputs of [`simulate`](super::simulate).
 #[derive(Debug, Clone, Copy)]
@@ -16,6 +16,11 @@ pub struct TruthInput<'a> {
     pub table: &'a TableMotion,
     /// Simulated duration (s), finite and > 0. Past the end of a record the table is at rest.
     pub duration_s: f64,
+    /// The friction law (its μ_fast is the structure's μ); Coulomb by default.
+    pub friction: FrictionLaw,
+    /// Integrate sliding phases even under Coulomb friction (to check the integration against
+    /// the closed forms); a velocity-dependent law is always integrated.
+    pub integrate_sliding: bool,
 }
 
 impl<'a> TruthInput<'a> {
@@ -26,7 +31,15 @@ impl<'a> TruthInput<'a> {
             mu_static: None,
             table,
             duration_s,
+            friction: FrictionLaw::Coulomb,
+            integrate_sliding: false,
         }
+    }
+
+    /// The same inputs with a friction law.
+    pub fn with_friction(mut self, friction: FrictionLaw) -> Self {
+        self.friction = friction;
+        self
     }
 
     /// The same inputs with a static friction coefficient μs (must be ≥ μ).
@@ -41,13 +54,15 @@ impl<'a> TruthInput<'a> {
 pub enum TruthError {
     /// The duration is not finite or not > 0.
     Duration(f64),
-    /// μs is not finite or below the kinetic μ.
+    /// μs is not finite or below the kinetic μ (at rest).
     StaticFriction {
         /// The offending μs.
         mu_static: f64,
-        /// The kinetic μ of the structure.
+        /// The kinetic μ of the structure (at rest).
         mu: f64,
     },
+    /// The friction law is invalid for the structure's μ.
+    Friction(ssvr_core::Error),
     /// The harmonic table motion has a non-finite amplitude or a period that is not finite and > 0.
     Harmonic {
         /// Amplitude (m/s²).
@@ -97,6 +112,7 @@ impl fmt::Display for TruthError {
                 f,
                 "static friction coefficient {mu_static}: expected a finite value >= the kinetic {mu}"
             ),
+            TruthError::Friction(e) => write!(f, "friction law: {e}"),
             TruthError::Harmonic {
                 amplitude_m_s2,
                 period_s,

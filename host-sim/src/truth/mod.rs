@@ -27,6 +27,16 @@
 //! |F_req| ≤ μs F0, otherwise it reverses. At t = 0 the structure is at rest relative to the table
 //! with the base stuck.
 //!
+//! # Velocity-dependent friction
+//!
+//! Under a velocity-dependent law ([`ssvr_core::FrictionLaw`], [`TruthInput::with_friction`]) the
+//! sliding force is −s·μ(|ẋ2|)·(m1+m2)g and a sliding phase has no closed form: it is integrated
+//! by the error-controlled Dormand–Prince 5(4) pair, one accepted step per piece, with a dense
+//! output of order 5 (see [`integrate`](self) module docs); stuck phases stay closed form and events
+//! are located on the dense output as on the closed forms. A slide starts at μ_slow; while
+//! μ_slow·N < |F_req| < μ_fast·N the base can creep at a small speed instead of sticking.
+//! Against RK4 at dt = 1e-6 s: 9e-11 of the peak, events to 2e-12 s (tests/truth_friction.rs).
+//!
 //! # Exactness
 //!
 //! Between events the motion is linear with constant friction and is propagated in closed form:
@@ -96,6 +106,7 @@
 mod events;
 mod forcing;
 mod input;
+mod integrate;
 mod model;
 mod phase;
 mod piece;

@@ -4,7 +4,7 @@
 use super::phase::Phase;
 use crate::table_motion::TableMotion;
 use ssvr_core::closed_form::free_vibration::Kernel;
-use ssvr_core::{Regime, Structure};
+use ssvr_core::{FrictionLaw, Regime, Structure};
 use std::f64::consts::PI;
 
 /// Grid points per shortest time scale (2π/ω of the fastest frequency or rate) for event bracketing.
@@ -42,10 +42,28 @@ pub(super) struct Model {
     /// Tolerances of "near the threshold": force (N) and slip velocity (m/s).
     pub(super) tol_f: f64,
     pub(super) tol_v: f64,
+    /// Sliding phases integrated ([`super::integrate`]) rather than in closed form: a
+    /// velocity-dependent law (or a Coulomb one, forced, to check the integration).
+    pub(super) integrated: bool,
+    /// The law μ(v) = mu_fast − mu_drop·e^{−rate·v} (mu_drop = 0, rate = 0 for Coulomb) and the
+    /// normal force (m1+m2)g (N).
+    pub(super) mu_fast: f64,
+    pub(super) mu_drop: f64,
+    pub(super) rate: f64,
+    pub(super) normal: f64,
+    /// Units of the integration's error scale: gμ/p² (m) and gμ/p (m/s).
+    pub(super) disp_unit: f64,
+    pub(super) vel_unit: f64,
 }
 
 impl Model {
-    pub(super) fn new(s: &Structure, mu_static: f64, table: &TableMotion) -> Self {
+    pub(super) fn new(
+        s: &Structure,
+        mu_static: f64,
+        table: &TableMotion,
+        law: FrictionLaw,
+        integrate: bool,
+    ) -> Self {
         let (m1, m2, p, xi) = (s.m1(), s.m2(), s.p(), s.xi());
         let m_total = m1 + m2;
         let f0 = s.mu() * m_total * s.g();
@@ -93,6 +111,16 @@ impl Model {
             h_fast: step(omega_fast),
             tol_f: 1e-11 * mu_static * m_total * s.g(),
             tol_v: 1e-13 * s.gmu() / p,
+            integrated: integrate || !law.is_coulomb(s.mu()),
+            mu_fast: s.mu(),
+            mu_drop: s.mu() - law.at_rest(s.mu()),
+            rate: match law {
+                FrictionLaw::Coulomb => 0.0,
+                FrictionLaw::VelocityDependent { rate_s_m, .. } => rate_s_m,
+            },
+            normal: m_total * s.g(),
+            disp_unit: s.gmu() / (p * p),
+            vel_unit: s.gmu() / p,
         }
     }
 

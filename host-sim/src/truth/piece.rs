@@ -66,7 +66,11 @@ impl Piece {
         let (jerk, friction, slip_acc) = match self.phase.direction() {
             None => (jerk_stuck, f_req, 0.0),
             Some(dir) => {
-                let force = -dir.sign() * m.f0;
+                let force = if m.integrated {
+                    m.sliding_force(dir.sign(), slip_vel)
+                } else {
+                    -dir.sign() * m.f0
+                };
                 (
                     jerk_of(m.mass_ratio * top - force / m.m2),
                     force,

@@ -5,6 +5,7 @@
 use super::events::scan;
 use super::forcing::segments;
 use super::input::{TruthError, TruthInput};
+use super::integrate::next_step;
 use super::model::Model;
 use super::phase::{Direction, Event, EventKind, Phase};
 use super::piece::{Piece, State};
@@ -12,6 +13,7 @@ use super::response::Truth;
 use super::roots::{brent, time_tol};
 use super::sampler::rest_sample;
 use super::MAX_EVENTS;
+use ssvr_core::FrictionLaw;
 
 /// Consecutive events at the same instant after which the solver gives up (no progress).
 const MAX_EVENTS_AT_ONE_INSTANT: usize = 16;
@@ -23,15 +25,25 @@ pub fn simulate(input: &TruthInput<'_>) -> Result<Truth, TruthError> {
     if !(duration.is_finite() && duration > 0.0) {
         return Err(TruthError::Duration(duration));
     }
-    let mu_static = input.mu_static.unwrap_or(s.mu());
-    if !(mu_static.is_finite() && mu_static >= s.mu()) {
+    let law = match input.friction {
+        FrictionLaw::Coulomb => FrictionLaw::Coulomb,
+        FrictionLaw::VelocityDependent { mu_slow, rate_s_m } => {
+            FrictionLaw::velocity_dependent(mu_slow, rate_s_m, s.mu())
+                .map_err(TruthError::Friction)?
+        }
+    };
+    let at_rest = law.at_rest(s.mu());
+    let mu_static = input.mu_static.unwrap_or(at_rest);
+    if !(mu_static.is_finite() && mu_static >= at_rest) {
         return Err(TruthError::StaticFriction {
             mu_static,
-            mu: s.mu(),
+            mu: at_rest,
         });
     }
     let segs = segments(input.table)?;
-    let m = Model::new(s, mu_static, input.table);
+    let m = Model::new(s, mu_static, input.table, law, input.integrate_sliding);
+    // The integrated sliding phases' next step (s).
+    let mut h_next = m.h_slide / 16.0;
 
     let mut pieces: Vec<Piece> = Vec::new();
     let mut events: Vec<Event> = Vec::new();
@@ -50,13 +62,30 @@ pub fn simulate(input: &TruthInput<'_>) -> Result<Truth, TruthError> {
             seg_idx += 1;
         }
         let seg = segs[seg_idx];
-        let t_end = seg.end.min(duration);
+        let mut t_end = seg.end.min(duration);
         let piece = Piece {
             t0: t,
             phase,
             state,
             forcing: seg.forcing.shifted(t - seg.start),
         };
+        if let (true, Some(dir)) = (m.integrated, phase.direction()) {
+            // One accepted step of the integration is one piece.
+            let floor = 8.0 * f64::EPSILON * t.abs().max(m.h_fast);
+            let mut h = h_next.min(m.h_slide).min(t_end - t).max(floor);
+            loop {
+                let e = piece.step_error(&m, dir, h);
+                if !e.is_finite() {
+                    return Err(TruthError::NotFinite { time_s: t });
+                }
+                if e <= 1.0 || h <= floor {
+                    h_next = next_step(h, e);
+                    break;
+                }
+                h = next_step(h, e).max(floor);
+            }
+            t_end = (t + h).min(t_end);
+        }
         let len = t_end - t;
         let age0 = t - last_transition;
         let sc = scan(&piece, &m, len, soft, age0);
@@ -74,6 +103,10 @@ pub fn simulate(input: &TruthInput<'_>) -> Result<Truth, TruthError> {
             Some(tau_e) => t + tau_e,
             None => t_end,
         };
+        if sc.event.is_some() {
+            // A new phase starts: the integration restarts with a small step.
+            h_next = m.h_slide / 16.0;
+        }
         if t_next > t {
             let (pk, at) = piece_peak(&piece, &m, tau_end, age0);
             if pk > peak_top.0 {

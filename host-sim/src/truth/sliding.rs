@@ -1,5 +1,6 @@
 //! Closed-form propagation of a sliding phase: the drift δ by the exact free vibration of eq (25)
-//! about the sliding equilibrium, the centre of mass by the exact integrals of the table motion.
+//! about the sliding equilibrium, the centre of mass by the exact integrals of the table motion
+//! (Coulomb friction); under a velocity-dependent law, one step of [`super::integrate`].
 
 use super::model::Model;
 use super::phase::Direction;
@@ -15,6 +16,10 @@ impl Piece {
         dir: Direction,
         tau: f64,
     ) -> (f64, f64, f64, f64) {
+        if m.integrated {
+            let (y, _) = self.dopri(m, dir, tau);
+            return (y[0], y[1], y[2], y[3]);
+        }
         let s0 = self.state;
         let s = dir.sign();
         let eq = s * m.delta_eq;
