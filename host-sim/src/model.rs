@@ -33,7 +33,8 @@ pub fn choose_for(scene: &Scene) -> Result<(Model, String)> {
         .map_err(|e| anyhow!("the prior specimen is invalid: {e}"))?;
     let table = scene.table_motion();
     let input = TruthInput::new(&structure, &table, scene.duration_s)
-        .with_static_friction(prior.static_friction_coefficient);
+        .with_static_friction(prior.static_friction_coefficient)
+        .with_friction(scene.estimator.friction);
     let sim = simulate(&input).map_err(|e| anyhow!("the simulation of the prior failed: {e}"))?;
     let (model, why) = choose(&sim, scene.duration_s);
     Ok((model, format!("{why} (simulation of the prior)")))

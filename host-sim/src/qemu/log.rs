@@ -63,7 +63,8 @@ pub struct SceneLog {
 pub fn scene_log(scene: &Scene) -> Result<SceneLog> {
     let table = scene.table_motion();
     let input = TruthInput::new(&scene.structure, &table, scene.duration_s)
-        .with_static_friction(scene.static_friction_coefficient);
+        .with_static_friction(scene.static_friction_coefficient)
+        .with_friction(scene.friction);
     let truth = truth::simulate(&input).map_err(|e| anyhow!("truth simulation: {e}"))?;
     let measured = sensors::measure_all(&scene.sensors, &truth, scene.rate_hz, scene.samples);
     if measured.len() as u64 != scene.samples {

@@ -175,7 +175,8 @@ pub fn run<W: Write>(
     }
     let table = scene.table_motion();
     let input = TruthInput::new(&scene.structure, &table, scene.duration_s)
-        .with_static_friction(scene.static_friction_coefficient);
+        .with_static_friction(scene.static_friction_coefficient)
+        .with_friction(scene.friction);
     let truth =
         simulate(&input).map_err(|e| anyhow!("{label}: the truth simulation failed: {e}"))?;
 
