@@ -18,7 +18,8 @@
 //!   ([`detect::displacement`]), or from the slip acceleration (base minus table accelerometer,
 //!   [`detect::acceleration`]).
 //! * [`stick_slip`]: the stick-slip aware estimator with online friction identification.
-//! * [`friction`]: the friction law of the sliding interface (Coulomb, or velocity-dependent).
+//! * [`friction`]: the friction law of the sliding interface (Coulomb, or velocity-dependent);
+//!   [`friction_id`]: its online identification from the sliding phases.
 //!
 //! The library is `#![no_std]`, allocates nothing and never panics on any input: every fallible
 //! operation returns a typed [`Error`].
@@ -36,6 +37,7 @@ pub mod closed_form;
 pub mod detect;
 pub mod error;
 pub mod friction;
+pub mod friction_id;
 pub mod math;
 pub mod oscillator_id;
 pub mod recursion;

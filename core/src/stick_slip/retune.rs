@@ -62,3 +62,15 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
         (self.slide_gain, self.slide) = self.slides[usize::from(self.slide_narrow)];
     }
 }
+
+impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H> {
+    /// Use the kinetic friction coefficient `mu` from the next interval on: a velocity-dependent
+    /// friction law sets it for every sliding sample from the slip speed. A late event's
+    /// re-simulation uses the coefficient in force then for the intervals it revises.
+    #[inline(always)]
+    pub fn set_friction(&mut self, mu: T) {
+        self.mu_use = mu;
+        self.gmu = self.c.g * mu;
+        self.set_drive();
+    }
+}
