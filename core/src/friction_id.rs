@@ -169,7 +169,7 @@ impl FrictionLawId {
         let sy = self.y.get() + self.block_y;
         let syy = self.yy.get() + self.block_yy;
         let det = n * see - se * se;
-        if !(det > 1e-6 * n * see) {
+        if det.is_nan() || det <= 1e-6 * n * see {
             return None;
         }
         let c1 = (n * sye - se * sy) / det;
