@@ -259,6 +259,8 @@ pub trait Step {
     /// The base accelerometer's gain against the table's, as its detector tracks and removes it
     /// ([`EventDetector::gain_mismatch`]; 0 for the displacement detector).
     fn gain_mismatch(&self) -> f32;
+    /// The model's velocity-dependent friction law ([`Model::friction_law`]).
+    fn friction_law(&self) -> Option<crate::model::FrictionReport>;
 }
 
 impl<M: Model, D: EventDetector> Step for Pipeline<M, D> {
@@ -291,5 +293,8 @@ impl<M: Model, D: EventDetector> Step for Pipeline<M, D> {
     }
     fn gain_mismatch(&self) -> f32 {
         self.detector.gain_mismatch()
+    }
+    fn friction_law(&self) -> Option<crate::model::FrictionReport> {
+        self.model.friction_law()
     }
 }

@@ -11,7 +11,7 @@ use ssvr_core::detect::acceleration::PhaseDetectorConfig;
 use ssvr_core::detect::displacement::DetectorConfig;
 use ssvr_core::recursion::Estimator32;
 use ssvr_core::stick_slip::{history_for_age, storage_for, StickSlipCoefficients, StickSlipConfig};
-use ssvr_core::{Error, Structure, StructureParams};
+use ssvr_core::{Error, FrictionLaw, Structure, StructureParams};
 
 /// The longest stick-slip history (samples) a plan may ask for: the host's storage.
 pub const MAX_HISTORY: usize = 2048;
@@ -34,6 +34,9 @@ pub struct Specimen {
     pub accel_noise_rms_m_s2: f64,
     /// Displacement full scale ± (m): a sample at or beyond it is unusable.
     pub disp_range_m: f64,
+    /// The friction law of the interface (its μ_fast is the structure's friction coefficient):
+    /// a velocity-dependent one makes the stick-slip model follow μ(v) from the slip speed.
+    pub friction: FrictionLaw,
 }
 
 /// The friction-event detector of a plan.
@@ -114,9 +117,9 @@ pub struct Plan {
 }
 
 /// Version of the word layout ([`Plan::to_words`]).
-pub const WORDS_VERSION: u32 = 2;
+pub const WORDS_VERSION: u32 = 3;
 /// Length of a plan's words.
-pub const WORDS: usize = 44 + COEFFICIENT_WORDS;
+pub const WORDS: usize = 49 + COEFFICIENT_WORDS;
 
 impl Plan {
     /// The plan of `specimen` and `model`: every setting validated by the library.
@@ -125,6 +128,9 @@ impl Plan {
         let structure = Structure::new(s.structure)?;
         let mu = s.structure.friction_coefficient;
         let rate = s.sample_rate_hz;
+        if let FrictionLaw::VelocityDependent { mu_slow, rate_s_m } = s.friction {
+            FrictionLaw::velocity_dependent(mu_slow, rate_s_m, mu)?;
+        }
         Estimator32::new(&structure, rate)?;
         let (detector, ring, max_age) = if model.detects_on_acceleration() {
             let d = PhaseDetectorConfig::for_noise(s.accel_noise_rms_m_s2)?
@@ -213,6 +219,18 @@ impl Plan {
         w.f64(s.disp_noise_rms_m);
         w.f64(s.accel_noise_rms_m_s2);
         w.f64(s.disp_range_m);
+        match s.friction {
+            FrictionLaw::Coulomb => {
+                w.u32(0);
+                w.f64(0.0);
+                w.f64(0.0);
+            }
+            FrictionLaw::VelocityDependent { mu_slow, rate_s_m } => {
+                w.u32(1);
+                w.f64(mu_slow);
+                w.f64(rate_s_m);
+            }
+        }
         match self.detector {
             DetectorPlan::Displacement(d) => {
                 w.u32(0);
@@ -280,6 +298,11 @@ impl Plan {
             disp_noise_rms_m: r.f64(),
             accel_noise_rms_m_s2: r.f64(),
             disp_range_m: r.f64(),
+            friction: match (r.u32(), r.f64(), r.f64()) {
+                (0, _, _) => FrictionLaw::Coulomb,
+                (1, mu_slow, rate_s_m) => FrictionLaw::VelocityDependent { mu_slow, rate_s_m },
+                _ => return Err(PlanError::Words),
+            },
         };
         let kind = r.u32();
         let x = r.u32();
@@ -439,6 +462,7 @@ mod tests {
             disp_noise_rms_m: 1e-6,
             accel_noise_rms_m_s2: 5e-3,
             disp_range_m: 0.05,
+            friction: FrictionLaw::Coulomb,
         }
     }
 

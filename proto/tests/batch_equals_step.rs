@@ -28,6 +28,7 @@ fn specimen() -> Specimen {
         disp_noise_rms_m: 1e-6,
         accel_noise_rms_m_s2: 5e-3,
         disp_range_m: 0.05,
+        friction: ssvr_core::FrictionLaw::Coulomb,
     }
 }
 

@@ -103,6 +103,7 @@ impl Specimen {
             disp_noise_rms_m: self.sensors.disp_noise_rms_m,
             accel_noise_rms_m_s2: self.sensors.accel_noise_rms_m_s2,
             disp_range_m: self.sensors.disp_range_m,
+            friction: self.estimator.friction,
         }
     }
 }

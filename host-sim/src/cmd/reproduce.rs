@@ -2,7 +2,7 @@
 //! `report.md` (the computations: [`crate::report::reproduce`]).
 
 use crate::report::reproduce::{
-    fig10::fig10, fig6::fig6, fig9::fig9, markdown::report_md, spectra::spectra, table2::table2,
+    fig10::fig10, fig6::fig6, fig9::fig9, friction::friction, markdown::report_md, spectra::spectra, table2::table2,
     Results, Sweep,
 };
 use anyhow::{Context, Result};
@@ -44,12 +44,15 @@ pub fn run(opts: &ReproduceOptions) -> Result<PathBuf> {
     lap("fig 10");
     let sp = spectra(sweep, &dir.join("fig11-sliding-response-spectra.png"))?;
     lap("fig 11");
+    let fr = friction(sweep, &dir.join("friction.png"))?;
+    lap("friction");
     let results = Results {
         table2: t2,
         fig6: f6,
         fig9: f9,
         fig10: f10,
         spectra: sp,
+        friction: fr,
         seconds,
         quick: opts.quick,
     };

@@ -1,9 +1,9 @@
 //! The paper's figures of `host-sim reproduce` (their numbers: [`crate::report::reproduce`]):
 //! Fig. 6 (b-d) time histories, Fig. 9 (m1 ≫ m2), Fig. 10 (peak against mass ratio) and Fig. 11
-//! (sliding response spectra), as [`Figure`]s.
+//! (sliding response spectra), and the velocity-dependent friction sweep, as [`Figure`]s.
 
 use super::figure::{self, Figure, Marker, Panel, Series, Style};
-use crate::report::reproduce::{Fig10, Spectra, PAPER_G};
+use crate::report::reproduce::{Fig10, Friction, Spectra, PAPER_G};
 use plotters::prelude::SeriesLabelPosition;
 
 /// Fig. 6 (b-d): one panel per method (TFM, RFM, RDM; points (t, ü1 in gal)) over `shown` seconds,
@@ -249,5 +249,78 @@ pub fn spectra_figure(
         panels: vec![a, b],
         cols: 1,
         panel_size: (1500, 600),
+    }
+}
+
+/// The velocity-dependent friction sweep: steady-state peak over the Coulomb peak against
+/// μ_slow/μ_fast, one panel per input period, one line per rate a, and the paper's Coulomb
+/// prediction (ratio 1).
+pub fn friction_figure(r: &Friction) -> Figure {
+    let lo = r.mu_ratios.iter().copied().fold(1.0, f64::min);
+    let ymin = r
+        .cases
+        .iter()
+        .flat_map(|c| c.points.iter().flatten())
+        .map(|p| p.peak_over_coulomb)
+        .filter(|v| v.is_finite())
+        .fold(1.0, f64::min);
+    let ymax = r
+        .cases
+        .iter()
+        .flat_map(|c| c.points.iter().flatten())
+        .map(|p| p.peak_over_coulomb)
+        .filter(|v| v.is_finite())
+        .fold(1.0, f64::max);
+    let x_range = (lo - 0.03, 1.03);
+    let y_range = (
+        (ymin - 0.05).min(0.9),
+        (ymax + 0.05).max(1.05),
+    );
+    let panels = r
+        .cases
+        .iter()
+        .enumerate()
+        .map(|(i, case)| {
+            let mut p = Panel::new(
+                format!(
+                    "({}) input {} m/s² at T = {} s; Coulomb peak {:.3} gμ_fast",
+                    ["a", "b", "c", "d"][i % 4],
+                    r.a0_m_s2,
+                    case.period_s,
+                    case.coulomb_peak_gmu
+                ),
+                "μ_slow / μ_fast (μs = μ_slow)",
+                "steady-state peak |ü1| / Coulomb peak",
+            );
+            p.x_range = Some(x_range);
+            p.y_range = Some(y_range);
+            p.series.push(Series::new(
+                "paper's Coulomb prediction (μ = μ_fast)",
+                vec![(x_range.0, 1.0), (x_range.1, 1.0)],
+                figure::color(6),
+                Style::Dashed,
+            ));
+            for (a, (&rate, row)) in r.rates_s_m.iter().zip(&case.points).enumerate() {
+                p.series.push(Series::new(
+                    format!("a = {rate} s/m"),
+                    row.iter()
+                        .map(|pt| (pt.mu_ratio, pt.peak_over_coulomb))
+                        .collect(),
+                    figure::color(a),
+                    Style::LineMarkers(Marker::Circle, 5),
+                ));
+            }
+            p.legend_outside = Some(340);
+            p
+        })
+        .collect();
+    Figure {
+        title: format!(
+            "Velocity-dependent friction μ(v) = μ_fast − (μ_fast − μ_slow)·e^(−a|v|): Table 1 specimen, μ_fast {} (g = {PAPER_G})",
+            r.mu_fast
+        ),
+        panels,
+        cols: 1,
+        panel_size: (1300, 520),
     }
 }

@@ -308,6 +308,7 @@ pub fn replay<W: Write>(
             pipe.static_friction(),
             pipe.offsets(),
             (model == Model::StickSlip).then(|| pipe.gain_mismatch()),
+            pipe.friction_law(),
         ),
         events: EventCounts {
             slip_starts: count("slip_start"),

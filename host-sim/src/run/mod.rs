@@ -269,6 +269,7 @@ fn outcome(
             runner.pipe.static_friction(),
             runner.pipe.offsets(),
             (model == Model::StickSlip).then(|| runner.pipe.gain_mismatch()),
+            runner.pipe.friction_law(),
         ),
         mu_estimate: mu.map(|m| m.mu),
         mu_std: mu.map(|m| m.std),

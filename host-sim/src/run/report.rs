@@ -95,6 +95,46 @@ pub struct Identified {
     /// detector tracks and removes it (absent: the displacement detector).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub base_vs_table_gain_error: Option<f64>,
+    /// The velocity-dependent friction law the model used at the end (absent: the model uses
+    /// none, i.e. Coulomb friction).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub friction: Option<FrictionLawJson>,
+}
+
+/// `estimator.identified.friction`: the law μ(v) = mu_fast − (mu_fast − mu_slow)·e^{−rate_s_m·|v|}
+/// in use at the end of the run (identified online in fuse mode, the prior's in predict mode).
+#[derive(Debug, Clone, Serialize)]
+pub struct FrictionLawJson {
+    /// "velocity-dependent".
+    pub law: &'static str,
+    /// μ as |v| → 0.
+    pub mu_slow: f64,
+    /// μ at high speed.
+    pub mu_fast: f64,
+    /// a (s/m).
+    pub rate_s_m: f64,
+    /// Times an identified law was adopted (0: the prior's law throughout).
+    pub adoptions: u32,
+    /// Observations (sliding samples) of the last fit (absent: no fit).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub observations: Option<u32>,
+    /// RMS residual of the last fit (units of μ; absent: no fit).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub residual_rms: Option<f64>,
+}
+
+impl From<ssvr_proto::model::FrictionReport> for FrictionLawJson {
+    fn from(r: ssvr_proto::model::FrictionReport) -> Self {
+        Self {
+            law: "velocity-dependent",
+            mu_slow: f64::from(r.mu_slow),
+            mu_fast: f64::from(r.mu_fast),
+            rate_s_m: f64::from(r.rate_s_m),
+            adoptions: r.adoptions,
+            observations: r.fit.map(|f| f.observations),
+            residual_rms: r.fit.map(|f| f64::from(f.residual_rms)),
+        }
+    }
 }
 
 /// The f and ξ a model used at the end of a run (`estimator.identified.in_use`).
@@ -117,6 +157,7 @@ impl Identified {
         static_friction: Option<ssvr_proto::StaticFriction>,
         offsets: [f32; 3],
         gain_mismatch: Option<f32>,
+        friction: Option<ssvr_proto::model::FrictionReport>,
     ) -> Self {
         let p = &plan.specimen.structure;
         let est = oscillator.and_then(|o| o.estimate);
@@ -137,6 +178,7 @@ impl Identified {
             static_friction_coefficient_std: static_friction.map(|s| s.std),
             static_friction_slip_starts: static_friction.map(|s| s.slip_starts),
             base_vs_table_gain_error: gain_mismatch.map(f64::from),
+            friction: friction.map(FrictionLawJson::from),
         }
     }
 }

@@ -9,10 +9,12 @@
 //! * **stick-slip** ([`StickSlipModel`]): the base sticks and slides in turn: the stick-slip
 //!   estimator (f32, `F32Poly`) with online friction identification ([`STICK_SLIP_CONFIG`]).
 
+mod friction;
 mod rectangular;
 mod stick_slip;
 mod tuning;
 
+pub use friction::{FrictionReport, SlipFriction};
 pub use rectangular::RectangularModel;
 pub use stick_slip::{FixedBaseModel, StickSlipF32, StickSlipModel};
 pub use tuning::{OscillatorReport, Tuning, CHECK_EVERY};
@@ -192,6 +194,11 @@ pub trait Model {
     fn static_friction(&self) -> Option<StaticFriction> {
         None
     }
+    /// The velocity-dependent friction law in use and its identification, if the model follows
+    /// one (the stick-slip model when the plan's specimen has such a law).
+    fn friction_law(&self) -> Option<FrictionReport> {
+        None
+    }
 }
 
 /// The static (breakaway) friction coefficient identified at the detected slip starts
@@ -264,6 +271,9 @@ impl<M: Model + ?Sized> Model for std::boxed::Box<M> {
     }
     fn static_friction(&self) -> Option<StaticFriction> {
         (**self).static_friction()
+    }
+    fn friction_law(&self) -> Option<FrictionReport> {
+        (**self).friction_law()
     }
 }
 

@@ -6,6 +6,7 @@
 //! beyond the plan's longest back-dating is clamped to it. A run of samples is predicted with
 //! `update_block` (bit for bit `update` on each sample).
 
+use super::friction::{FrictionReport, SlipFriction};
 use super::tuning::{OscillatorReport, Tuning};
 use super::{Breakaways, FromPlan, Mode, Model, ModelKind, Pushed, StaticFriction};
 use crate::channel::{Channel, CHANNELS};
@@ -15,7 +16,9 @@ use crate::frame::Frame;
 use crate::pipeline::BATCH;
 use crate::plan::{Plan, PlanError};
 use ssvr_core::math::F32Poly;
-use ssvr_core::stick_slip::{MuEstimate, StickSlipCoefficients, StickSlipEstimator};
+use ssvr_core::stick_slip::{
+    MuEstimate, SlidingPhase, StickSlipCoefficients, StickSlipEstimator,
+};
 use ssvr_core::Error;
 
 /// The stick-slip estimator in f32 with storage for `H` samples of history.
@@ -37,6 +40,8 @@ pub struct StickSlipModel<const H: usize, const EVENTS: bool = true> {
     /// model's own).
     fuse: bool,
     breakaways: Breakaways,
+    /// A velocity-dependent friction law (None: Coulomb).
+    friction: Option<SlipFriction>,
 }
 
 /// The estimator's inputs of a sample: the table acceleration, and the top acceleration (NaN
@@ -66,6 +71,7 @@ impl<const H: usize, const EVENTS: bool> StickSlipModel<H, EVENTS> {
             tuning: None,
             fuse: true,
             breakaways: Breakaways::default(),
+            friction: None,
         }
     }
 
@@ -103,6 +109,18 @@ impl<const H: usize, const EVENTS: bool> FromPlan for StickSlipModel<H, EVENTS> 
         };
         let mut m = Self::new(est, plan.max_age as f32).with_tuning(tuning);
         m.fuse = plan.mode == Mode::Fuse;
+        let p = &plan.specimen.structure;
+        m.friction = if EVENTS {
+            SlipFriction::new(
+                plan.specimen.friction,
+                p.friction_coefficient,
+                (p.m1_kg, p.m2_kg, p.gravity_m_s2),
+                plan.specimen.sample_rate_hz,
+                m.fuse,
+            )
+        } else {
+            None
+        };
         Ok(m)
     }
 }
@@ -122,6 +140,9 @@ impl<const H: usize, const EVENTS: bool> Model for StickSlipModel<H, EVENTS> {
             return Ok(Pushed::No);
         }
         let phase = if e.is_stick() { 0 } else { e.level };
+        if let (true, Some(f)) = (e.is_stick(), &mut self.friction) {
+            f.stick();
+        }
         if e.kind == EventKind::SlipStart && e.age_samples <= self.max_age {
             if let Some(mu) = self.est.breakaway_coefficient(e.age_samples, self.fuse) {
                 self.breakaways.push(mu);
@@ -149,6 +170,31 @@ impl<const H: usize, const EVENTS: bool> Model for StickSlipModel<H, EVENTS> {
     #[inline(always)]
     fn predict_run(&mut self, frames: &mut [Frame], from: usize) {
         let to = from + frames.len();
+        if let Some(fr) = &mut self.friction {
+            // Sample by sample: the friction coefficient changes with the slip speed.
+            let (Some(table), Some(top), Some(base)) = (
+                self.table.get(from..to),
+                self.top.get(from..to),
+                self.base.get(from..to),
+            ) else {
+                return;
+            };
+            for (((f, &u), &y), &b) in frames.iter_mut().zip(table).zip(top).zip(base) {
+                let sliding = self.est.phase() != SlidingPhase::Stuck;
+                if let Some(mu) = fr.sample(b, u, y, sliding) {
+                    self.est.set_friction(mu);
+                }
+                f.prediction = self.est.update(u, y);
+            }
+            fr.check(frames.len() as u32);
+            if let Some(t) = &mut self.tuning {
+                t.push_run(top, base);
+                if let Some(c) = t.check(frames.len() as u32) {
+                    self.est.retune(c);
+                }
+            }
+            return;
+        }
         // The run's predictions (on the stack: static RAM is the board's budget).
         let mut out = [0.0f32; BATCH];
         let (Some(table), Some(top), Some(pred)) = (
@@ -186,6 +232,10 @@ impl<const H: usize, const EVENTS: bool> Model for StickSlipModel<H, EVENTS> {
 
     fn oscillator(&self) -> Option<OscillatorReport> {
         self.tuning.as_ref().map(Tuning::report)
+    }
+
+    fn friction_law(&self) -> Option<FrictionReport> {
+        self.friction.as_ref().map(SlipFriction::report)
     }
 
     fn static_friction(&self) -> Option<StaticFriction> {

@@ -5,6 +5,8 @@
 //! * [`steady`]: steady-state peaks (the truth under harmonic input, RDM by the exact recursion).
 //! * [`fig6`], [`fig9`], [`fig10`], [`spectra`] (Fig. 11): the figures' numbers; the figures are
 //!   drawn by [`crate::plot::reproduce`].
+//! * [`friction`]: beyond the paper, how much its Coulomb prediction misses when the friction is
+//!   velocity-dependent.
 //! * [`markdown`]: `report.md`, what matches the paper and what differs.
 //!
 //! Sweeps run in parallel (rayon) with a progress bar (indicatif) on standard error.
@@ -12,6 +14,7 @@
 pub mod fig10;
 pub mod fig6;
 pub mod fig9;
+pub mod friction;
 pub mod markdown;
 pub mod spectra;
 pub mod steady;
@@ -25,8 +28,9 @@ use ssvr_core::{Structure, StructureParams};
 pub use fig10::Fig10;
 pub use fig6::Fig6;
 pub use fig9::Fig9;
+pub use friction::{Friction, FrictionCase, FrictionPoint};
 pub use spectra::{HarmonicPoint, QuakePoint, Spectra};
-pub use steady::{rdm_steady_peak_gmu, SteadyPeak};
+pub use steady::{rdm_steady_peak_gmu, steady_of_truth, SteadyPeak};
 pub use table2::{Table2Result, Table2Row, TABLE2};
 
 /// The paper's gravity (980 gal).
@@ -54,6 +58,8 @@ pub struct Results {
     pub fig10: Fig10,
     /// Fig. 11.
     pub spectra: Spectra,
+    /// Velocity-dependent friction against the paper's Coulomb prediction.
+    pub friction: Friction,
     /// Seconds per part.
     pub seconds: Vec<(String, f64)>,
     /// `--quick`.

@@ -80,15 +80,26 @@ fn settle_duration(s: &Structure, period: f64, quick: bool) -> f64 {
 
 /// The truth's steady state under harmonic input (see [`SteadyPeak`]).
 pub(super) fn steady_peak(s: &Structure, a0: f64, period: f64, quick: bool) -> Result<SteadyPeak> {
-    let cycles = 5.0;
-    let duration = settle_duration(s, period, quick) + 2.0 * cycles * period;
+    let duration = settle_duration(s, period, quick) + 2.0 * STEADY_CYCLES * period;
     let truth = truth_harmonic(s, a0, period, duration, s.mu())?;
+    Ok(steady_of_truth(&truth, period))
+}
+
+/// Periods over which a steady-state peak is taken (and, before them, its convergence check).
+pub const STEADY_CYCLES: f64 = 5.0;
+
+/// The steady state of a truth under harmonic input of period `period` (see [`SteadyPeak`]): peak
+/// |ü1| over the last [`STEADY_CYCLES`] periods of its duration (dense sampling and a
+/// golden-section refinement), the same over the periods before, and the events per period.
+pub fn steady_of_truth(truth: &Truth, period: f64) -> SteadyPeak {
+    let cycles = STEADY_CYCLES;
+    let duration = truth.duration_s();
     let t1 = duration;
     let t0 = t1 - cycles * period;
     let tp = t0 - cycles * period;
     let pts = 4000 * cycles as usize;
-    let peak = truth_peak(&truth, t0, t1, pts);
-    let prev = truth_peak(&truth, tp, t0, pts);
+    let peak = truth_peak(truth, t0, t1, pts);
+    let prev = truth_peak(truth, tp, t0, pts);
     let (mut sticks, mut slips) = (0usize, 0usize);
     for e in truth.events().iter().filter(|e| e.time_s >= t0) {
         match e.kind {
@@ -96,13 +107,13 @@ pub(super) fn steady_peak(s: &Structure, a0: f64, period: f64, quick: bool) -> R
             _ => slips += 1,
         }
     }
-    Ok(SteadyPeak {
+    SteadyPeak {
         peak_m_s2: peak,
         previous_peak_m_s2: prev,
         sticks_per_cycle: sticks as f64 / cycles,
         slips_per_cycle: slips as f64 / cycles,
         duration_s: duration,
-    })
+    }
 }
 
 /// Steady-state peak |ü1| / gμ of RDM (the paper's alternating train every T/2) by the exact
