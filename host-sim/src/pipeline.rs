@@ -165,3 +165,35 @@ pub fn model_step(
     model.predict_run(core::slice::from_mut(&mut frame), 0);
     Ok((frame.prediction, used))
 }
+
+/// A tracker of the base accelerometer's offset as the pipeline removes it: the plan's
+/// slip-acceleration detector (the same code and ring) fed each sample's zeroed channels and
+/// flags, returning its offset after the sample (0 for a displacement detector). The f64
+/// reference of `host-sim qemu` reads the base the way the model does with it.
+pub type OffsetTracker = Box<dyn FnMut(&[f32; ssvr_proto::CHANNELS], u8) -> f32>;
+
+/// [`OffsetTracker`] of a plan.
+pub fn base_offset_tracker(plan: &Plan) -> Result<OffsetTracker> {
+    fn make<D: EventDetector + 'static>(plan: &Plan) -> Result<OffsetTracker> {
+        let mut d = D::from_plan(plan).map_err(|e| anyhow!("detector: {e}"))?;
+        Ok(Box::new(move |ch, f| {
+            let table = ch[ssvr_proto::Channel::TableAccel.index()];
+            let _ = d.process_with_reference(D::INPUT.of(ch, f), table);
+            d.offset()
+        }))
+    }
+    macro_rules! rings {
+        ($det:ident, $($n:literal)*) => {
+            match plan.ring {
+                $($n => make::<$det<$n>>(plan),)*
+                n => bail!("no host detector with a ring of {n} samples"),
+            }
+        };
+    }
+    match plan.detector {
+        DetectorPlan::Displacement(_) => Ok(Box::new(|_, _| 0.0)),
+        DetectorPlan::SlipAcceleration(_) => {
+            rings!(AccelerationDetector, 8 16 32 64 128 256 512 1024)
+        }
+    }
+}

@@ -20,6 +20,8 @@ pub(crate) struct RawEstimator {
     damping_ratio: Option<Spanned<f64>>,
     friction_coefficient: Option<Spanned<f64>>,
     static_friction_coefficient: Option<Spanned<f64>>,
+    mu_slow: Option<Spanned<f64>>,
+    rate_s_m: Option<Spanned<f64>>,
 }
 
 /// The estimator's prior of the specimen.
@@ -114,17 +116,41 @@ impl ParseContext<'_> {
             };
             self.err(span, core_message(key, value, &e))
         })?;
-        if let FrictionLaw::VelocityDependent { mu_slow, .. } = friction {
-            if let Some(v) = &r.friction_coefficient {
-                self.check(
-                    S,
-                    "friction_coefficient",
-                    v,
-                    *v.get_ref() >= mu_slow,
-                    "friction_coefficient >= [friction] mu_slow",
-                )?;
+        // The law the controller is told: the interface's, its values overridden by
+        // `[estimator] mu_slow` and `rate_s_m`.
+        let friction = match friction {
+            FrictionLaw::Coulomb => {
+                for (key, v) in [("mu_slow", &r.mu_slow), ("rate_s_m", &r.rate_s_m)] {
+                    if let Some(v) = v {
+                        return Err(self.err(
+                            v.span(),
+                            format!(
+                                "[estimator] {key} applies to a [friction] law = \"velocity-dependent\" only"
+                            ),
+                        ));
+                    }
+                }
+                FrictionLaw::Coulomb
             }
-        }
+            FrictionLaw::VelocityDependent { mu_slow, rate_s_m } => {
+                let slow = val(&r.mu_slow, mu_slow);
+                let rate = val(&r.rate_s_m, rate_s_m);
+                FrictionLaw::velocity_dependent(slow, rate, prior.mu()).map_err(|e| {
+                    let pick = |key: &'static str, v: &Option<Spanned<f64>>| match v {
+                        Some(v) => (key, v.span(), *v.get_ref()),
+                        None => (key, table.span(), f64::NAN),
+                    };
+                    let (key, span, value) = match (e.param(), &r.mu_slow, &r.rate_s_m) {
+                        (Param::FrictionRate, _, Some(_)) => {
+                            pick("[estimator] rate_s_m", &r.rate_s_m)
+                        }
+                        (Param::MuSlow, Some(_), _) => pick("[estimator] mu_slow", &r.mu_slow),
+                        _ => pick("[estimator] friction_coefficient", &r.friction_coefficient),
+                    };
+                    self.err(span, core_message(key, value, &e))
+                })?
+            }
+        };
         let mu = friction.at_rest(prior.mu());
         let static_friction_coefficient = match &r.static_friction_coefficient {
             Some(v) => self.check(

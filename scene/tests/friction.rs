@@ -96,3 +96,39 @@ fn bad_friction_tables_name_the_key() {
         ],
     );
 }
+
+#[test]
+fn the_prior_law_can_differ_from_the_interface() {
+    let law = "law = \"velocity-dependent\"\nmu_slow = 0.12\nrate_s_m = 30.0\n";
+    let text = format!(
+        "{}[estimator]\nfriction_coefficient = 0.22\nmu_slow = 0.15\nrate_s_m = 60.0\n",
+        with_friction(law)
+    );
+    let s = parse(&text).unwrap();
+    assert_eq!(
+        s.friction,
+        FrictionLaw::VelocityDependent {
+            mu_slow: 0.12,
+            rate_s_m: 30.0
+        }
+    );
+    assert_eq!(
+        s.estimator.friction,
+        FrictionLaw::VelocityDependent {
+            mu_slow: 0.15,
+            rate_s_m: 60.0
+        }
+    );
+    assert_eq!(s.estimator.params.friction_coefficient, 0.22);
+    // The prior's μs: the scene's (0.12) is below the prior's μ_slow: raised to it.
+    assert_eq!(s.estimator.static_friction_coefficient, 0.15);
+    // Errors name the [estimator] key.
+    let bad = format!("{}[estimator]\nmu_slow = 0.3\n", with_friction(law));
+    error_at(&bad, 20, &["[estimator] mu_slow = 0.3 is out of range"]);
+    let bad = format!("{BASE}[estimator]\nrate_s_m = 3.0\n");
+    error_at(
+        &bad,
+        16,
+        &["[estimator] rate_s_m applies to a [friction] law"],
+    );
+}

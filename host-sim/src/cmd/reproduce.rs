@@ -2,8 +2,8 @@
 //! `report.md` (the computations: [`crate::report::reproduce`]).
 
 use crate::report::reproduce::{
-    fig10::fig10, fig6::fig6, fig9::fig9, friction::friction, markdown::report_md, spectra::spectra, table2::table2,
-    Results, Sweep,
+    fig10::fig10, fig6::fig6, fig9::fig9, friction::friction, markdown::report_md,
+    spectra::spectra, table2::table2, Results, Sweep,
 };
 use anyhow::{Context, Result};
 use std::path::PathBuf;

@@ -272,10 +272,7 @@ pub fn friction_figure(r: &Friction) -> Figure {
         .filter(|v| v.is_finite())
         .fold(1.0, f64::max);
     let x_range = (lo - 0.03, 1.03);
-    let y_range = (
-        (ymin - 0.05).min(0.9),
-        (ymax + 0.05).max(1.05),
-    );
+    let y_range = ((ymin - 0.05).min(0.9), (ymax + 0.05).max(1.05));
     let panels = r
         .cases
         .iter()
@@ -283,7 +280,7 @@ pub fn friction_figure(r: &Friction) -> Figure {
         .map(|(i, case)| {
             let mut p = Panel::new(
                 format!(
-                    "({}) input {} m/s² at T = {} s; Coulomb peak {:.3} gμ_fast",
+                    "({}) input {} m/s² at T = {} s; Coulomb peak {:.3} gμ_fast (g = {PAPER_G})",
                     ["a", "b", "c", "d"][i % 4],
                     r.a0_m_s2,
                     case.period_s,
@@ -295,7 +292,7 @@ pub fn friction_figure(r: &Friction) -> Figure {
             p.x_range = Some(x_range);
             p.y_range = Some(y_range);
             p.series.push(Series::new(
-                "paper's Coulomb prediction (μ = μ_fast)",
+                format!("paper's Coulomb prediction (μ = μ_fast = {})", r.mu_fast),
                 vec![(x_range.0, 1.0), (x_range.1, 1.0)],
                 figure::color(6),
                 Style::Dashed,
@@ -310,17 +307,15 @@ pub fn friction_figure(r: &Friction) -> Figure {
                     Style::LineMarkers(Marker::Circle, 5),
                 ));
             }
-            p.legend_outside = Some(340);
+            p.legend_outside = Some(440);
             p
         })
         .collect();
     Figure {
-        title: format!(
-            "Velocity-dependent friction μ(v) = μ_fast − (μ_fast − μ_slow)·e^(−a|v|): Table 1 specimen, μ_fast {} (g = {PAPER_G})",
-            r.mu_fast
-        ),
+        title: "Velocity-dependent friction μ(v) = μ_fast − (μ_fast − μ_slow)·e^(−a|v|), Table 1 specimen"
+            .into(),
         panels,
         cols: 1,
-        panel_size: (1300, 520),
+        panel_size: (1500, 520),
     }
 }

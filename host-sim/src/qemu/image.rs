@@ -194,7 +194,14 @@ pub fn firmware_scene_toml(scene: &Scene) -> String {
         dn = s.disp_noise_rms_m,
         an = s.accel_noise_rms_m_s2,
     );
-    text + &rest
+    // The prior's friction law (a velocity-dependent one makes the model follow it).
+    let friction = match scene.estimator.friction {
+        ssvr_core::FrictionLaw::Coulomb => String::new(),
+        ssvr_core::FrictionLaw::VelocityDependent { mu_slow, rate_s_m } => format!(
+            "\n[friction]\nlaw = \"velocity-dependent\"\nmu_slow = {mu_slow:?}\nrate_s_m = {rate_s_m:?}\n"
+        ),
+    };
+    text + &friction + &rest
 }
 
 /// Images built for a scene by [`build_for_scene`].

@@ -12,8 +12,9 @@ use crate::scene::Scene;
 use anyhow::{anyhow, Result};
 use ssvr_core::closed_form::duhamel::{DuhamelClosedForm, Reversal, ReversalTrain};
 use ssvr_core::math::Libm;
-use ssvr_core::stick_slip::StickSlipEstimator;
+use ssvr_core::stick_slip::{SlidingPhase, StickSlipEstimator};
 use ssvr_core::Structure;
+use ssvr_proto::model::SlipFriction;
 use ssvr_proto::plan::MAX_HISTORY;
 use ssvr_proto::zeroing::Zeroing;
 use ssvr_proto::{flags, Frame, ModelKind as Model, Plan, Sample};
@@ -99,6 +100,12 @@ pub enum Reference {
         level_changes: usize,
         /// Pushed events older than an earlier-pushed one.
         out_of_order: usize,
+        /// A velocity-dependent law: the firmware's own slip-speed and law code (f32) sets the
+        /// f64 estimator's friction per sample, so the reference measures the estimator's
+        /// arithmetic.
+        friction: Option<SlipFriction>,
+        /// The base offset the pipeline removes (its detector's), for the friction's slip speed.
+        base_offset: crate::pipeline::OffsetTracker,
     },
 }
 
@@ -130,6 +137,19 @@ impl Reference {
                 last: (0, f64::NEG_INFINITY),
                 level_changes: 0,
                 out_of_order: 0,
+                friction: if plan.model == Model::StickSlip {
+                    let p = &plan.specimen.structure;
+                    SlipFriction::new(
+                        plan.specimen.friction,
+                        p.friction_coefficient,
+                        (p.m1_kg, p.m2_kg, p.gravity_m_s2),
+                        plan.specimen.sample_rate_hz,
+                        plan.mode == ssvr_proto::model::Mode::Fuse,
+                    )
+                } else {
+                    None
+                },
+                base_offset: crate::pipeline::base_offset_tracker(plan)?,
             },
         })
     }
@@ -159,11 +179,17 @@ impl Reference {
                 last,
                 level_changes,
                 out_of_order,
+                friction,
+                base_offset,
             } => {
                 let mut channels = s.channels;
                 zeroing.apply(k as u32, &mut channels, f.flags);
+                channels[ssvr_proto::Channel::BaseAccel.index()] -= base_offset(&channels, f.flags);
                 if let Some(e) = f.event.filter(|_| f.flags & flags::EVENT_PUSHED != 0) {
                     let phase = if e.is_stick() { 0 } else { e.level };
+                    if let (0, Some(fr)) = (phase, friction.as_mut()) {
+                        fr.stick();
+                    }
                     let age = e.age_samples.min(*max_age);
                     est.push_event(phase, f64::from(age)).map_err(|err| {
                         anyhow!("the f64 reference rejects the event of sample {k}: {err:?}")
@@ -183,10 +209,16 @@ impl Reference {
                 } else {
                     f64::NAN
                 };
-                Ok(est.update(
-                    f64::from(channels[ssvr_proto::Channel::TableAccel.index()]),
-                    top,
-                ))
+                let table = channels[ssvr_proto::Channel::TableAccel.index()];
+                if let Some(fr) = friction {
+                    let sliding = est.phase() != SlidingPhase::Stuck;
+                    let base = channels[ssvr_proto::Channel::BaseAccel.index()];
+                    if let Some(mu) = fr.sample(base, table, top as f32, sliding) {
+                        est.set_friction(f64::from(mu));
+                    }
+                    fr.check(1);
+                }
+                Ok(est.update(f64::from(table), top))
             }
         }
     }

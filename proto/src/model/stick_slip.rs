@@ -16,9 +16,7 @@ use crate::frame::Frame;
 use crate::pipeline::BATCH;
 use crate::plan::{Plan, PlanError};
 use ssvr_core::math::F32Poly;
-use ssvr_core::stick_slip::{
-    MuEstimate, SlidingPhase, StickSlipCoefficients, StickSlipEstimator,
-};
+use ssvr_core::stick_slip::{MuEstimate, SlidingPhase, StickSlipCoefficients, StickSlipEstimator};
 use ssvr_core::Error;
 
 /// The stick-slip estimator in f32 with storage for `H` samples of history.

@@ -7,12 +7,12 @@
 //! truth for μ_slow/μ_fast = 1 (Coulomb, the paper's model, closed form) down to 0.4 and three
 //! rates a, against the Coulomb peak.
 
-use super::steady::{steady_of_truth, SteadyPeak};
+use super::steady::{steady_of_truth, SteadyPeak, STEADY_CYCLES};
 use super::{bar, Sweep, PAPER_G};
 use crate::plot::figure;
 use crate::plot::reproduce::friction_figure;
 use crate::table_motion::TableMotion;
-use crate::truth::{simulate, TruthInput};
+use crate::truth::{simulate, EventKind, TruthInput};
 use anyhow::{anyhow, Result};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -93,8 +93,10 @@ pub struct FrictionPoint {
     pub peak_gmu: f64,
     /// Peak over the Coulomb peak (ratio 1) of the same input.
     pub peak_over_coulomb: f64,
-    /// Largest |slip| over the run (m).
+    /// Largest |slip| over the run (m; from rest, so it includes the start-up transient's offset).
     pub max_slip_m: f64,
+    /// Peak-to-peak slip over the steady-state window (the last periods; m).
+    pub steady_slip_p2p_m: f64,
     /// The truth's steady state (m/s², with its convergence check and events per period).
     pub steady: SteadyPeak,
 }
@@ -155,9 +157,15 @@ impl Friction {
     }
 }
 
-/// The steady state and largest slip of the truth under harmonic input with the law of
-/// ([`law`]) `ratio` and `rate_s_m`.
-fn run(s: &Structure, period: f64, duration: f64, ratio: f64, rate: f64) -> Result<(SteadyPeak, f64)> {
+/// The steady state, the largest |slip| and the steady-state peak-to-peak slip of the truth under
+/// harmonic input with the law ([`law`]) of `ratio` and `rate`.
+fn run(
+    s: &Structure,
+    period: f64,
+    duration: f64,
+    ratio: f64,
+    rate: f64,
+) -> Result<(SteadyPeak, f64, f64)> {
     let table = TableMotion::Harmonic {
         amplitude_m_s2: A0_M_S2,
         period_s: period,
@@ -169,7 +177,26 @@ fn run(s: &Structure, period: f64, duration: f64, ratio: f64, rate: f64) -> Resu
             .with_friction(law),
     )
     .map_err(|e| anyhow!("truth simulation (μ_slow/μ_fast {ratio}, a {rate} s/m): {e}"))?;
-    Ok((steady_of_truth(&truth, period), truth.max_abs_slip_m()))
+    let steady = steady_of_truth(&truth, period);
+    // Slip extremes are where the slip velocity vanishes: at sticks and reversals (and the ends).
+    let t0 = duration - STEADY_CYCLES * period;
+    let mut times = vec![t0, duration];
+    times.extend(
+        truth
+            .events()
+            .iter()
+            .filter(|e| e.time_s >= t0 && !matches!(e.kind, EventKind::SlipStart { .. }))
+            .map(|e| e.time_s),
+    );
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for t in times {
+        let x = truth
+            .sample(t)
+            .ok_or_else(|| anyhow!("internal: no truth sample at {t} s"))?
+            .slip_m;
+        (lo, hi) = (lo.min(x), hi.max(x));
+    }
+    Ok((steady, truth.max_abs_slip_m(), hi - lo))
 }
 
 /// Compute the sweep (in parallel) and draw it to `path` (PNG).
@@ -194,7 +221,7 @@ pub fn friction(sweep: Sweep, path: &Path) -> Result<Friction> {
         })
         .collect();
     let pb = bar(sweep, jobs.len(), "friction (truth runs)");
-    let vals: Result<Vec<(SteadyPeak, f64)>> = jobs
+    let vals: Result<Vec<(SteadyPeak, f64, f64)>> = jobs
         .par_iter()
         .map(|&(c, a, r)| {
             let v = run(&s, PERIODS_S[c], durations[c], ratios[r], rates[a]);
@@ -222,13 +249,14 @@ pub fn friction(sweep: Sweep, path: &Path) -> Result<Friction> {
         for (a, &rate) in rates.iter().enumerate() {
             let mut row = Vec::new();
             for (r, &ratio) in ratios.iter().enumerate() {
-                let (steady, slip) = at(a, r)?;
+                let (steady, slip, p2p) = at(a, r)?;
                 row.push(FrictionPoint {
                     mu_ratio: ratio,
                     rate_s_m: rate,
                     peak_gmu: steady.peak_m_s2 / gmu,
                     peak_over_coulomb: steady.peak_m_s2 / coulomb,
                     max_slip_m: slip,
+                    steady_slip_p2p_m: p2p,
                     steady,
                 });
             }
