@@ -28,7 +28,7 @@ pub const RATE_STEP: f32 = 5.0;
 /// Observations per block of f32 sums before they are folded into the compensated totals.
 pub const BLOCK: u32 = 32;
 /// Observations before a fit is given.
-pub const MIN_OBSERVATIONS: u32 = 2048;
+pub const MIN_OBSERVATIONS: u32 = 256;
 
 /// A compensated f32 total: hi + lo.
 #[derive(Debug, Clone, Copy, Default)]

@@ -12,7 +12,8 @@
 //!   ([`StickSlipEstimator::set_friction`](ssvr_core::stick_slip::StickSlipEstimator::set_friction)).
 //! * **Identification** (fuse mode: it reads the top accelerometer): while sliding at
 //!   |v| ≥ [`MIN_SPEED`], μ = |r·ü1 + (1 − r)·ü2|/g (eq 4) is one observation of the law
-//!   ([`FrictionLawId`]); every [`CHECK_EVERY`] samples a fit is adopted when it exists.
+//!   ([`FrictionLawId`]), one sample in [`OBSERVE_EVERY`]; every [`CHECK_EVERY`] samples a fit
+//!   is adopted when it exists.
 //!
 //! All in f32: the firmware and the host run this same code.
 
@@ -27,6 +28,10 @@ pub const MIN_SPEED: f32 = 2e-3;
 pub const CHECK_EVERY: u32 = 1024;
 /// Time constant of the slip speed's leak while stuck (s).
 pub const LEAK_S: f64 = 0.2;
+/// One sliding sample in this many is an observation of the law (the identification's cost per
+/// sample divided by it; a 10 kHz run still gives thousands of observations per second of
+/// sliding).
+pub const OBSERVE_EVERY: u8 = 4;
 
 /// The law in use and how it was identified (`run --json` `estimator.identified.friction`).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -59,6 +64,8 @@ pub struct SlipFriction {
     v: f32,
     prev_acc: f32,
     id: Option<FrictionLawId>,
+    /// Sliding samples until the next observation.
+    skip: u8,
     countdown: u32,
     adoptions: u32,
     fit: Option<LawFit>,
@@ -89,6 +96,7 @@ impl SlipFriction {
             v: 0.0,
             prev_acc: 0.0,
             id: identify.then(|| FrictionLawId::new(mu_fast as f32)),
+            skip: 0,
             countdown: CHECK_EVERY,
             adoptions: 0,
             fit: None,
@@ -120,13 +128,32 @@ impl SlipFriction {
             return None;
         }
         if let Some(id) = &mut self.id {
-            let speed = v1.abs();
-            if speed >= MIN_SPEED && top.is_finite() && base.is_finite() {
-                let mu = (self.r * top + (1.0 - self.r) * base).abs() * self.inv_g;
-                id.push(speed, mu);
+            if self.skip == 0 {
+                let speed = v1.abs();
+                if speed >= MIN_SPEED && top.is_finite() && base.is_finite() {
+                    let mu = (self.r * top + (1.0 - self.r) * base).abs() * self.inv_g;
+                    id.push(speed, mu);
+                    self.skip = OBSERVE_EVERY;
+                }
             }
+            self.skip = self.skip.saturating_sub(1);
         }
         Some(self.mu(0.5 * (v0 + v1)))
+    }
+
+    /// A run of stuck samples (base and table accelerations): the slip speed only (integrated and
+    /// leaking).
+    #[inline(always)]
+    pub fn stuck_run(&mut self, base: &[f32], table: &[f32]) {
+        for (&b, &u) in base.iter().zip(table) {
+            let acc = if b.is_finite() && u.is_finite() {
+                b - u
+            } else {
+                self.prev_acc
+            };
+            self.v = (self.v + self.half_dt * (self.prev_acc + acc)) * self.leak;
+            self.prev_acc = acc;
+        }
     }
 
     /// A stick reported by the detector: the slip speed is 0.

@@ -177,12 +177,24 @@ impl<const H: usize, const EVENTS: bool> Model for StickSlipModel<H, EVENTS> {
             ) else {
                 return;
             };
-            for (((f, &u), &y), &b) in frames.iter_mut().zip(table).zip(top).zip(base) {
-                let sliding = self.est.phase() != SlidingPhase::Stuck;
-                if let Some(mu) = fr.sample(b, u, y, sliding) {
-                    self.est.set_friction(mu);
+            if self.est.phase() == SlidingPhase::Stuck {
+                // A run is in one phase (events start runs): stuck throughout, in blocks.
+                fr.stuck_run(base, table);
+                let mut out = [0.0f32; BATCH];
+                if let Some(pred) = out.get_mut(..frames.len()) {
+                    if self.est.update_block(table, top, pred).is_ok() {
+                        for (f, &p) in frames.iter_mut().zip(pred.iter()) {
+                            f.prediction = p;
+                        }
+                    }
                 }
-                f.prediction = self.est.update(u, y);
+            } else {
+                for (((f, &u), &y), &b) in frames.iter_mut().zip(table).zip(top).zip(base) {
+                    if let Some(mu) = fr.sample(b, u, y, true) {
+                        self.est.set_friction(mu);
+                    }
+                    f.prediction = self.est.update(u, y);
+                }
             }
             fr.check(frames.len() as u32);
             if let Some(t) = &mut self.tuning {
