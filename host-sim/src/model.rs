@@ -37,7 +37,19 @@ pub fn choose_for(scene: &Scene) -> Result<(Model, String)> {
         .with_friction(scene.estimator.friction);
     let sim = simulate(&input).map_err(|e| anyhow!("the simulation of the prior failed: {e}"))?;
     let (model, why) = choose(&sim, scene.duration_s);
-    Ok((model, format!("{why} (simulation of the prior)")))
+    // What the friction law adds (the stick-slip model follows a velocity-dependent one).
+    let law = match (model, scene.estimator.friction) {
+        (Model::StickSlip, ssvr_core::FrictionLaw::VelocityDependent { mu_slow, rate_s_m }) => {
+            format!(
+                "; velocity-dependent friction (mu {mu_slow} at rest to {} above ~{:.2} m/s): \
+                 mu follows the measured slip speed",
+                prior.structure.friction_coefficient,
+                3.0 / rate_s_m
+            )
+        }
+        _ => String::new(),
+    };
+    Ok((model, format!("{why} (simulation of the prior){law}")))
 }
 
 /// The smallest model that serves the simulated run, with the reason in words.

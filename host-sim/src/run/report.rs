@@ -380,7 +380,18 @@ pub fn summary_text(r: &RunReport) -> String {
         e.peak_measured_m_s2, e.peak_predicted_m_s2, e.peak_truth_sampled_m_s2
     );
     s += &format!("  model: {} ({})", e.model, e.model_reason);
-    if let (Some(mu), Some(sd)) = (e.mu_estimate, e.mu_std) {
+    if let Some(law) = &e.identified.friction {
+        s += &format!(
+            "; friction law in use: mu_slow {:.5}, mu_fast {:.5}, a {:.2} s/m ({})",
+            law.mu_slow,
+            law.mu_fast,
+            law.rate_s_m,
+            match law.adoptions {
+                0 => "the prior's".to_string(),
+                n => format!("identified, {n} adoptions"),
+            }
+        );
+    } else if let (Some(mu), Some(sd)) = (e.mu_estimate, e.mu_std) {
         s += &format!("; identified mu = {mu:.5} ± {sd:.5}");
     }
     s += "\n";
