@@ -103,7 +103,7 @@ pub enum Reference {
         /// A velocity-dependent law: the firmware's own slip-speed and law code (f32) sets the
         /// f64 estimator's friction per sample, so the reference measures the estimator's
         /// arithmetic.
-        friction: Option<SlipFriction>,
+        friction: Option<Box<SlipFriction>>,
         /// The base offset the pipeline removes (its detector's), for the friction's slip speed.
         base_offset: crate::pipeline::OffsetTracker,
     },
@@ -146,6 +146,7 @@ impl Reference {
                         plan.specimen.sample_rate_hz,
                         plan.mode == ssvr_proto::model::Mode::Fuse,
                     )
+                    .map(Box::new)
                 } else {
                     None
                 },

@@ -197,7 +197,16 @@ fn run(
             .slip_m;
         (lo, hi) = (lo.min(x), hi.max(x));
     }
-    Ok((steady, truth.max_abs_slip_m(), hi - lo))
+    let out = (steady, truth.max_abs_slip_m(), hi - lo);
+    if ![out.0.peak_m_s2, out.0.previous_peak_m_s2, out.1, out.2]
+        .iter()
+        .all(|x| x.is_finite())
+    {
+        return Err(anyhow!(
+            "truth (μ_slow/μ_fast {ratio}, a {rate} s/m): a peak or slip is not finite"
+        ));
+    }
+    Ok(out)
 }
 
 /// Compute the sweep (in parallel) and draw it to `path` (PNG).
