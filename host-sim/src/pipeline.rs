@@ -11,7 +11,7 @@ use ssvr_proto::plan::MAX_HISTORY;
 use ssvr_proto::{
     flags, AccelerationDetector, DetectorPlan, DisplacementDetector, EventDetector, EventSource,
     FixedBaseModel, FromPlan, Mode, ModelKind, Pipeline, Plan, RectangularModel, Sample, Specimen,
-    Step, StickSlipModel,
+    Step, StickSlipLawModel, StickSlipModel,
 };
 
 /// What the controller is told of a scene's specimen and sensors (`ssvr_scene::Specimen::prior`,
@@ -127,6 +127,18 @@ pub fn model(plan: &Plan, opts: Options) -> Result<Box<dyn ssvr_proto::Model>> {
                 .map_err(|e| anyhow!("estimator: {e}"))?
                 .with_zero_at_stick(opts.zero_at_stick),
         ),
+        // A velocity-dependent law: the model that follows it (as the firmware's build picks).
+        ModelKind::StickSlip
+            if !plan
+                .specimen
+                .friction
+                .is_coulomb(plan.specimen.structure.friction_coefficient) =>
+        {
+            Box::new(
+                StickSlipLawModel::<MAX_HISTORY>::from_plan(plan)
+                    .map_err(|e| anyhow!("estimator: {e}"))?,
+            )
+        }
         ModelKind::StickSlip => Box::new(
             StickSlipModel::<MAX_HISTORY>::from_plan(plan)
                 .map_err(|e| anyhow!("estimator: {e}"))?,

@@ -24,7 +24,9 @@ impl BenchModel for RectangularModel {
     }
 }
 
-impl<const H: usize, const EVENTS: bool> BenchModel for StickSlipModel<H, EVENTS> {
+impl<const H: usize, const EVENTS: bool, F: ssvr_proto::model::FrictionSlot> BenchModel
+    for StickSlipModel<H, EVENTS, F>
+{
     /// The stick-slip model (events on) or the fixed-base model (events off).
     fn estimator_blocks(&self, t: &mut Ticks, plan: &Plan) -> (u32, u32, u32, u32) {
         let est = self.estimator().clone();

@@ -192,3 +192,58 @@ impl SlipFriction {
         }
     }
 }
+
+/// Where the stick-slip model keeps a velocity-dependent friction law: `Option<SlipFriction>`
+/// (a plan with such a law: `StickSlipLawModel`), or `()` (Coulomb friction, and the fixed-base
+/// model, which never slides: no code in the image, no room in the board's static RAM).
+pub trait FrictionSlot: Clone + core::fmt::Debug {
+    /// Whether it keeps a law (a plan with a velocity-dependent law needs one).
+    const FOLLOWS_LAW: bool;
+    /// No law.
+    fn none() -> Self;
+    /// The law of a plan's specimen (identified online in fuse mode).
+    fn of_plan(plan: &crate::plan::Plan) -> Self;
+    /// The law, if any.
+    fn get(&self) -> Option<&SlipFriction>;
+    /// The law, if any.
+    fn get_mut(&mut self) -> Option<&mut SlipFriction>;
+}
+
+impl FrictionSlot for () {
+    const FOLLOWS_LAW: bool = false;
+    fn none() -> Self {}
+    fn of_plan(_: &crate::plan::Plan) -> Self {}
+    #[inline(always)]
+    fn get(&self) -> Option<&SlipFriction> {
+        None
+    }
+    #[inline(always)]
+    fn get_mut(&mut self) -> Option<&mut SlipFriction> {
+        None
+    }
+}
+
+impl FrictionSlot for Option<SlipFriction> {
+    const FOLLOWS_LAW: bool = true;
+    fn none() -> Self {
+        None
+    }
+    fn of_plan(plan: &crate::plan::Plan) -> Self {
+        let p = &plan.specimen.structure;
+        SlipFriction::new(
+            plan.specimen.friction,
+            p.friction_coefficient,
+            (p.m1_kg, p.m2_kg, p.gravity_m_s2),
+            plan.specimen.sample_rate_hz,
+            plan.mode == crate::model::Mode::Fuse,
+        )
+    }
+    #[inline(always)]
+    fn get(&self) -> Option<&SlipFriction> {
+        self.as_ref()
+    }
+    #[inline(always)]
+    fn get_mut(&mut self) -> Option<&mut SlipFriction> {
+        self.as_mut()
+    }
+}

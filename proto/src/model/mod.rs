@@ -14,9 +14,9 @@ mod rectangular;
 mod stick_slip;
 mod tuning;
 
-pub use friction::{FrictionReport, SlipFriction};
+pub use friction::{FrictionReport, FrictionSlot, SlipFriction};
 pub use rectangular::RectangularModel;
-pub use stick_slip::{FixedBaseModel, StickSlipF32, StickSlipModel};
+pub use stick_slip::{FixedBaseModel, StickSlipF32, StickSlipLawModel, StickSlipModel};
 pub use tuning::{OscillatorReport, Tuning, CHECK_EVERY};
 
 use crate::channel::CHANNELS;

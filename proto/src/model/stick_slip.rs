@@ -6,7 +6,7 @@
 //! beyond the plan's longest back-dating is clamped to it. A run of samples is predicted with
 //! `update_block` (bit for bit `update` on each sample).
 
-use super::friction::{FrictionReport, SlipFriction};
+use super::friction::{FrictionReport, FrictionSlot, SlipFriction};
 use super::tuning::{OscillatorReport, Tuning};
 use super::{Breakaways, FromPlan, Mode, Model, ModelKind, Pushed, StaticFriction};
 use crate::channel::{Channel, CHANNELS};
@@ -23,9 +23,10 @@ use ssvr_core::Error;
 pub type StickSlipF32<const H: usize> = StickSlipEstimator<f32, F32Poly, H>;
 
 /// The stick-slip model (`EVENTS` true: events pushed) or, with `EVENTS` false, the fixed-base
-/// model ([`FixedBaseModel`]: no event pushed, so the image holds no event code).
+/// model ([`FixedBaseModel`]: no event pushed, so the image holds no event code). `F` keeps a
+/// velocity-dependent friction law ([`FrictionSlot`]; `()` for the fixed-base model).
 #[derive(Debug, Clone)]
-pub struct StickSlipModel<const H: usize, const EVENTS: bool = true> {
+pub struct StickSlipModel<const H: usize, const EVENTS: bool = true, F: FrictionSlot = ()> {
     est: StickSlipF32<H>,
     max_age: f32,
     table: [f32; BATCH],
@@ -39,7 +40,7 @@ pub struct StickSlipModel<const H: usize, const EVENTS: bool = true> {
     fuse: bool,
     breakaways: Breakaways,
     /// A velocity-dependent friction law (None: Coulomb).
-    friction: Option<SlipFriction>,
+    friction: F,
 }
 
 /// The estimator's inputs of a sample: the table acceleration, and the top acceleration (NaN
@@ -54,10 +55,14 @@ fn inputs(channels: &[f32; CHANNELS], f: u8) -> (f32, f32) {
     (channels[Channel::TableAccel.index()], top)
 }
 
-/// The fixed-base model: the stick-slip estimator held stuck, no event pushed.
-pub type FixedBaseModel<const H: usize> = StickSlipModel<H, false>;
+/// The stick-slip model following a velocity-dependent friction law (a plan whose specimen has
+/// one): μ per sliding sample from the slip speed, the law identified online in fuse mode.
+pub type StickSlipLawModel<const H: usize> = StickSlipModel<H, true, Option<SlipFriction>>;
 
-impl<const H: usize, const EVENTS: bool> StickSlipModel<H, EVENTS> {
+/// The fixed-base model: the stick-slip estimator held stuck, no event pushed.
+pub type FixedBaseModel<const H: usize> = StickSlipModel<H, false, ()>;
+
+impl<const H: usize, const EVENTS: bool, F: FrictionSlot> StickSlipModel<H, EVENTS, F> {
     /// The model on an estimator; events older than `max_age` samples are pushed with that age.
     pub fn new(est: StickSlipF32<H>, max_age: f32) -> Self {
         Self {
@@ -69,7 +74,7 @@ impl<const H: usize, const EVENTS: bool> StickSlipModel<H, EVENTS> {
             tuning: None,
             fuse: true,
             breakaways: Breakaways::default(),
-            friction: None,
+            friction: F::none(),
         }
     }
 
@@ -85,7 +90,9 @@ impl<const H: usize, const EVENTS: bool> StickSlipModel<H, EVENTS> {
     }
 }
 
-impl<const H: usize, const EVENTS: bool> FromPlan for StickSlipModel<H, EVENTS> {
+impl<const H: usize, const EVENTS: bool, F: FrictionSlot> FromPlan
+    for StickSlipModel<H, EVENTS, F>
+{
     /// The estimator restored from the plan's coefficients (computed in f64 and rounded to f32
     /// when the plan was made: the firmware needs no f64 start-up code), with the plan's
     /// settings and history.
@@ -98,6 +105,14 @@ impl<const H: usize, const EVENTS: bool> FromPlan for StickSlipModel<H, EVENTS> 
         if plan.model != want {
             return Err(PlanError::Model);
         }
+        // A stick-slip plan with a velocity-dependent law needs the model that follows it.
+        let law = !plan
+            .specimen
+            .friction
+            .is_coulomb(plan.specimen.structure.friction_coefficient);
+        if EVENTS && law != F::FOLLOWS_LAW {
+            return Err(PlanError::Model);
+        }
         let c = StickSlipCoefficients::from_bits(&plan.coefficients).ok_or(PlanError::Words)?;
         let est = StickSlipF32::<H>::from_coefficients(c, plan.stick_slip, plan.history)
             .map_err(PlanError::Core)?;
@@ -107,23 +122,12 @@ impl<const H: usize, const EVENTS: bool> FromPlan for StickSlipModel<H, EVENTS> 
         };
         let mut m = Self::new(est, plan.max_age as f32).with_tuning(tuning);
         m.fuse = plan.mode == Mode::Fuse;
-        let p = &plan.specimen.structure;
-        m.friction = if EVENTS {
-            SlipFriction::new(
-                plan.specimen.friction,
-                p.friction_coefficient,
-                (p.m1_kg, p.m2_kg, p.gravity_m_s2),
-                plan.specimen.sample_rate_hz,
-                m.fuse,
-            )
-        } else {
-            None
-        };
+        m.friction = F::of_plan(plan);
         Ok(m)
     }
 }
 
-impl<const H: usize, const EVENTS: bool> Model for StickSlipModel<H, EVENTS> {
+impl<const H: usize, const EVENTS: bool, F: FrictionSlot> Model for StickSlipModel<H, EVENTS, F> {
     fn kind(&self) -> ModelKind {
         if EVENTS {
             ModelKind::StickSlip
@@ -138,7 +142,7 @@ impl<const H: usize, const EVENTS: bool> Model for StickSlipModel<H, EVENTS> {
             return Ok(Pushed::No);
         }
         let phase = if e.is_stick() { 0 } else { e.level };
-        if let (true, Some(f)) = (e.is_stick(), &mut self.friction) {
+        if let (true, Some(f)) = (e.is_stick(), self.friction.get_mut()) {
             f.stick();
         }
         if e.kind == EventKind::SlipStart && e.age_samples <= self.max_age {
@@ -168,7 +172,7 @@ impl<const H: usize, const EVENTS: bool> Model for StickSlipModel<H, EVENTS> {
     #[inline(always)]
     fn predict_run(&mut self, frames: &mut [Frame], from: usize) {
         let to = from + frames.len();
-        if let Some(fr) = &mut self.friction {
+        if let Some(fr) = self.friction.get_mut() {
             // Sample by sample: the friction coefficient changes with the slip speed.
             let (Some(table), Some(top), Some(base)) = (
                 self.table.get(from..to),
@@ -245,7 +249,7 @@ impl<const H: usize, const EVENTS: bool> Model for StickSlipModel<H, EVENTS> {
     }
 
     fn friction_law(&self) -> Option<FrictionReport> {
-        self.friction.as_ref().map(SlipFriction::report)
+        self.friction.get().map(SlipFriction::report)
     }
 
     fn static_friction(&self) -> Option<StaticFriction> {
