@@ -414,3 +414,56 @@ fn plot_svg_and_png() {
         .unwrap();
     assert!(!bad.status.success());
 }
+
+/// A velocity-dependent interface: the replay scene's `[friction]` makes the model follow the
+/// law as `run`'s does; the replayed predictions are `run`'s bit for bit, and both report the
+/// identified law.
+#[test]
+fn a_velocity_dependent_run_replays_bit_for_bit() {
+    let dir = tempfile::tempdir().unwrap();
+    let law = "[friction]\nlaw = \"velocity-dependent\"\nmu_slow = 0.12\nrate_s_m = 30.0\n";
+    let scene = write(
+        dir.path(),
+        "ptfe.toml",
+        &run_scene(1.5, "", "").replace("[input]", &format!("{law}[input]")),
+    );
+    let rep = write(
+        dir.path(),
+        "rep.toml",
+        &replay_scene("run.csv", RUN_COLUMNS).replace("[recording]", &format!("{law}[recording]")),
+    );
+    let run_csv = dir.path().join("run.csv");
+    let out = host_sim()
+        .args(["run", scene.to_str().unwrap(), "--json", "--out"])
+        .arg(&run_csv)
+        .output()
+        .unwrap();
+    ok(&out);
+    let run_json = json(&out.stdout);
+    let rep_csv = dir.path().join("rep.csv");
+    let out = host_sim()
+        .args(["replay", rep.to_str().unwrap(), "--json", "--out"])
+        .arg(&rep_csv)
+        .output()
+        .unwrap();
+    ok(&out);
+    let j = json(&out.stdout);
+    assert_eq!(j["model"], "stick-slip");
+    let a = column(&run_csv, "predicted_top_accel_m_s2");
+    let b = column(&rep_csv, "predicted_top_accel_m_s2");
+    assert_eq!(a.len(), 15000);
+    let differ = a.iter().zip(&b).filter(|(x, y)| x != y).count();
+    assert_eq!(differ, 0, "{differ} predictions differ");
+    let law_run = &run_json["estimator"]["identified"]["friction"];
+    let law_rep = &j["identified"]["friction"];
+    assert_eq!(law_run["law"], "velocity-dependent");
+    assert_eq!(law_run, law_rep);
+    assert!(
+        (f(&law_rep["mu_slow"]) / 0.12 - 1.0).abs() < 0.03,
+        "{law_rep}"
+    );
+    assert!(
+        (f(&law_rep["mu_fast"]) / 0.2 - 1.0).abs() < 0.03,
+        "{law_rep}"
+    );
+}
