@@ -17,7 +17,8 @@ pub fn drain(consumer: &mut Consumer<'_, Frame>) -> u32 {
 
 /// Report the identified friction coefficient: `mu estimate=.. std=.. samples=..`, or `mu none`
 /// (models that identify μ only), then the f and ξ in use: `osc f_hz=.. xi=.. adoptions=..`
-/// (models that identify them, fuse mode).
+/// (models that identify them, fuse mode), and a velocity-dependent friction law in use:
+/// `law mu_slow=.. mu_fast=.. rate_s_m=.. adoptions=..` (a model that follows one).
 pub fn emit_mu(pipe: &ImagePipeline) {
     use ssvr_proto::Model as _;
     if pipe.model().kind() == ssvr_proto::ModelKind::Rectangular {
@@ -40,6 +41,17 @@ pub fn emit_mu(pipe: &ImagePipeline) {
             o.natural_frequency_hz,
             o.damping_ratio,
             o.adoptions
+        );
+    }
+    // A velocity-dependent friction law in use (identified online in fuse mode) and its
+    // adoptions: `law mu_slow=.. mu_fast=.. rate_s_m=.. adoptions=..`.
+    if let Some(l) = pipe.model().friction_law() {
+        defmt::info!(
+            "law mu_slow={=f32} mu_fast={=f32} rate_s_m={=f32} adoptions={=u32}",
+            l.mu_slow,
+            l.mu_fast,
+            l.rate_s_m,
+            l.adoptions
         );
     }
 }

@@ -71,6 +71,9 @@ pub struct MonitorReport {
     pub natural_frequency_hz: Option<f64>,
     /// The damping ratio it uses.
     pub damping_ratio: Option<f64>,
+    /// The velocity-dependent friction law the firmware's model uses (its `law` message:
+    /// μ_slow, μ_fast, a in s/m; none for Coulomb friction).
+    pub friction_law: Option<[f64; 3]>,
     /// The prediction against the top accelerometer the frames echo.
     pub vs_measured_top: Option<VsMeasured>,
     /// defmt frames that could not be decoded (corrupted in transit), skipped.
@@ -191,6 +194,12 @@ impl<W: Write> State<'_, W> {
             if let (Some(mu), Some(sd)) = (m.f64("estimate"), m.f64("std")) {
                 self.report.mu_estimate = Some(mu);
                 self.report.mu_std = Some(sd);
+            }
+        } else if m.name == "law" {
+            if let (Some(a), Some(b), Some(c)) =
+                (m.f64("mu_slow"), m.f64("mu_fast"), m.f64("rate_s_m"))
+            {
+                self.report.friction_law = Some([a, b, c]);
             }
         } else if m.name == "osc" {
             if let (Some(f), Some(xi)) = (m.f64("f_hz"), m.f64("xi")) {
@@ -388,9 +397,12 @@ pub fn live_line(r: &MonitorReport) -> String {
         format!(" ({:.1} s)", r.samples as f64 / rate)
     });
     let e = &r.events;
-    let mu = r
-        .mu_estimate
-        .map_or_else(|| "-".to_string(), |m| format!("{m:.5}"));
+    let mu = match r.friction_law {
+        Some([slow, fast, a]) => format!("{slow:.4} -> {fast:.4} (a {a:.1} s/m)"),
+        None => r
+            .mu_estimate
+            .map_or_else(|| "-".to_string(), |m| format!("{m:.5}")),
+    };
     let f = r
         .natural_frequency_hz
         .map_or_else(|| "-".to_string(), |f| format!("{f:.4} Hz"));
@@ -466,5 +478,23 @@ impl PlotSeries {
             );
         }
         c.finish_measured(&self.detected, name)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The live line shows the friction law in use when the firmware reports one, else μ̂.
+    #[test]
+    fn live_line_shows_the_law_or_mu() {
+        let mut r = MonitorReport {
+            mu_estimate: Some(0.167_97),
+            ..MonitorReport::default()
+        };
+        assert!(live_line(&r).contains("mu 0.16797,"), "{}", live_line(&r));
+        r.friction_law = Some([0.1198, 0.19996, 30.04]);
+        let line = live_line(&r);
+        assert!(line.contains("mu 0.1198 -> 0.2000 (a 30.0 s/m)"), "{line}");
     }
 }

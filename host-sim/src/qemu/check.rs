@@ -217,7 +217,8 @@ pub struct QemuReport {
     /// Identification updates it used (one per block of `identify_every` = 32 final sliding
     /// samples).
     pub mu_samples: Option<u32>,
-    /// The firmware's μ̂ equals the host's (bit for bit; true when neither has one).
+    /// The firmware's μ̂ equals the host's (bit for bit; true when neither has one), and so does
+    /// the velocity-dependent friction law in use (`law` message) if the model follows one.
     pub mu_equals_host: bool,
     /// The stick-slip estimator's history (samples; stick-slip and fixed-base models).
     pub history: Option<usize>,
@@ -454,7 +455,11 @@ pub fn run_scene_stream(
     }
     let fw_mu = decode::mu(&frames);
     let host_mu = host.mu_estimate().map(|m| (m.mu, m.std, m.blocks));
-    let mu_equal = fw_mu == host_mu;
+    let law_equal = decode::law(&frames)
+        == host
+            .friction_law()
+            .map(|l| (l.mu_slow, l.mu_fast, l.rate_s_m, l.adoptions));
+    let mu_equal = fw_mu == host_mu && law_equal;
 
     // (b) The full-precision reference on the detected events; (c) the truth.
     let (mut max_ref, mut max_ref_at) = (0.0f64, 0.0f64);

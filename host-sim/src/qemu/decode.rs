@@ -248,3 +248,15 @@ pub fn mu(messages: &[Message]) -> Option<(f64, f64, u32)> {
         .find(|m| m.name == "mu" && m.get("estimate").is_some())?;
     Some((m.f64("estimate")?, m.f64("std")?, m.u32("samples")?))
 }
+
+/// The firmware's last `law mu_slow=.. mu_fast=.. rate_s_m=.. adoptions=..` message: the
+/// velocity-dependent friction law in use (μ_slow, μ_fast, a, adoptions).
+pub fn law(messages: &[Message]) -> Option<(f32, f32, f32, u32)> {
+    let m = messages.iter().rev().find(|m| m.name == "law")?;
+    Some((
+        m.f64("mu_slow")? as f32,
+        m.f64("mu_fast")? as f32,
+        m.f64("rate_s_m")? as f32,
+        m.u32("adoptions")?,
+    ))
+}
