@@ -120,14 +120,7 @@ fn plan_consts(path: &Path, plan: &Plan) -> String {
     let model = match plan.model {
         ModelKind::Rectangular => "ssvr_proto::RectangularModel",
         // A velocity-dependent law: the model that follows it (only then is its code compiled in).
-        ModelKind::StickSlip
-            if !plan
-                .specimen
-                .friction
-                .is_coulomb(plan.specimen.structure.friction_coefficient) =>
-        {
-            "ssvr_proto::StickSlipLawModel<STORAGE>"
-        }
+        ModelKind::StickSlip if plan.follows_law() => "ssvr_proto::StickSlipLawModel<STORAGE>",
         ModelKind::StickSlip => "ssvr_proto::StickSlipModel<STORAGE>",
         ModelKind::FixedBase => "ssvr_proto::FixedBaseModel<STORAGE>",
     };

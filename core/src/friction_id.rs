@@ -115,7 +115,8 @@ impl FrictionLawId {
     /// One observation: the friction coefficient `mu` at slip speed `speed` (m/s, ≥ 0). Non-finite
     /// values are ignored.
     pub fn push(&mut self, speed: f32, mu: f32) {
-        if !(speed.is_finite() && mu.is_finite()) {
+        // (Beyond 2^24 observations n is no longer exact in f32: enough data, stop.)
+        if !(speed.is_finite() && mu.is_finite()) || self.n >= 1 << 24 {
             return;
         }
         let y = mu - self.centre;
@@ -169,7 +170,9 @@ impl FrictionLawId {
         let sy = self.y.get() + self.block_y;
         let syy = self.yy.get() + self.block_yy;
         let det = n * see - se * se;
-        if det.is_nan() || det <= 1e-6 * n * see {
+        // f32 rounding of n·Σe² − (Σe)² is ~1e-7 of n·Σe²: a rate whose e_j hardly vary is
+        // rejected well above it (the coefficients would carry the rounding).
+        if det.is_nan() || det <= 1e-4 * n * see {
             return None;
         }
         let c1 = (n * sye - se * sy) / det;
@@ -261,13 +264,24 @@ mod tests {
     fn no_fit_without_data_or_outside_the_grid() {
         let mut id = FrictionLawId::new(0.2);
         assert!(id.fit().is_none());
-        // Constant friction: every rate fits alike; no interior minimum → None or a flat law.
+        // Constant friction: every rate fits alike (zero residual): no interior minimum, or a
+        // law with μ_slow = μ_fast.
         for k in 0..5000 {
             id.push(0.001 * (k % 100) as f32, 0.2);
         }
-        if let Some(f) = id.fit() {
-            assert!((f.mu_fast - 0.2).abs() < 1e-3, "{f:?}");
+        match id.fit() {
+            None => {}
+            Some(f) => assert!(
+                (f.mu_fast - 0.2).abs() < 1e-3 && (f.mu_slow - 0.2).abs() < 1e-3,
+                "{f:?}"
+            ),
         }
+        // Speeds all near 0: the law is not determined (every e_j ≈ 1).
+        let mut id = FrictionLawId::new(0.2);
+        for _ in 0..5000 {
+            id.push(0.0, 0.12);
+        }
+        assert!(id.fit().is_none());
         id.push(f32::NAN, 0.1);
         assert_eq!(id.observations(), 5000);
     }

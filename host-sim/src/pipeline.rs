@@ -128,17 +128,10 @@ pub fn model(plan: &Plan, opts: Options) -> Result<Box<dyn ssvr_proto::Model>> {
                 .with_zero_at_stick(opts.zero_at_stick),
         ),
         // A velocity-dependent law: the model that follows it (as the firmware's build picks).
-        ModelKind::StickSlip
-            if !plan
-                .specimen
-                .friction
-                .is_coulomb(plan.specimen.structure.friction_coefficient) =>
-        {
-            Box::new(
-                StickSlipLawModel::<MAX_HISTORY>::from_plan(plan)
-                    .map_err(|e| anyhow!("estimator: {e}"))?,
-            )
-        }
+        ModelKind::StickSlip if plan.follows_law() => Box::new(
+            StickSlipLawModel::<MAX_HISTORY>::from_plan(plan)
+                .map_err(|e| anyhow!("estimator: {e}"))?,
+        ),
         ModelKind::StickSlip => Box::new(
             StickSlipModel::<MAX_HISTORY>::from_plan(plan)
                 .map_err(|e| anyhow!("estimator: {e}"))?,

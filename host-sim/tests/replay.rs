@@ -452,6 +452,7 @@ fn a_velocity_dependent_run_replays_bit_for_bit() {
     let a = column(&run_csv, "predicted_top_accel_m_s2");
     let b = column(&rep_csv, "predicted_top_accel_m_s2");
     assert_eq!(a.len(), 15000);
+    assert_eq!(a.len(), b.len());
     let differ = a.iter().zip(&b).filter(|(x, y)| x != y).count();
     assert_eq!(differ, 0, "{differ} predictions differ");
     let law_run = &run_json["estimator"]["identified"]["friction"];

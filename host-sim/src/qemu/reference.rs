@@ -137,7 +137,7 @@ impl Reference {
                 last: (0, f64::NEG_INFINITY),
                 level_changes: 0,
                 out_of_order: 0,
-                friction: if plan.model == Model::StickSlip {
+                friction: if plan.model == Model::StickSlip && plan.follows_law() {
                     let p = &plan.specimen.structure;
                     SlipFriction::new(
                         plan.specimen.friction,
@@ -188,8 +188,12 @@ impl Reference {
                 channels[ssvr_proto::Channel::BaseAccel.index()] -= base_offset(&channels, f.flags);
                 if let Some(e) = f.event.filter(|_| f.flags & flags::EVENT_PUSHED != 0) {
                     let phase = if e.is_stick() { 0 } else { e.level };
-                    if let (0, Some(fr)) = (phase, friction.as_mut()) {
-                        fr.stick();
+                    if let Some(fr) = friction.as_mut() {
+                        if phase == 0 {
+                            fr.stick();
+                        } else {
+                            est.set_friction(f64::from(fr.since_slip_start()));
+                        }
                     }
                     let age = e.age_samples.min(*max_age);
                     est.push_event(phase, f64::from(age)).map_err(|err| {
@@ -213,7 +217,11 @@ impl Reference {
                 let table = channels[ssvr_proto::Channel::TableAccel.index()];
                 if let Some(fr) = friction {
                     let sliding = est.phase() != SlidingPhase::Stuck;
-                    let base = channels[ssvr_proto::Channel::BaseAccel.index()];
+                    let base = if f.flags & (flags::SATURATED | flags::MISSING) == 0 {
+                        channels[ssvr_proto::Channel::BaseAccel.index()]
+                    } else {
+                        f32::NAN
+                    };
                     if let Some(mu) = fr.sample(base, table, top as f32, sliding) {
                         est.set_friction(f64::from(mu));
                     }

@@ -72,14 +72,20 @@ pub fn simulate(input: &TruthInput<'_>) -> Result<Truth, TruthError> {
         if let (true, Some(dir)) = (m.integrated, phase.direction()) {
             // One accepted step of the integration is one piece.
             let floor = 8.0 * f64::EPSILON * t.abs().max(m.h_fast);
-            let mut h = h_next.min(m.h_slide).min(t_end - t).max(floor);
+            let proposed = h_next.min(m.h_slide);
+            let mut h = proposed.min(t_end - t).max(floor);
             loop {
                 let e = piece.step_error(&m, dir, h);
                 if !e.is_finite() {
                     return Err(TruthError::NotFinite { time_s: t });
                 }
                 if e <= 1.0 || h <= floor {
-                    h_next = next_step(h, e);
+                    // A step cut short by the segment's end does not shrink the next one.
+                    h_next = if h < proposed && e <= 1.0 {
+                        proposed.max(next_step(h, e))
+                    } else {
+                        next_step(h, e)
+                    };
                     break;
                 }
                 h = next_step(h, e).max(floor);

@@ -24,8 +24,13 @@ use ssvr_core::FrictionLaw;
 /// Slowest slip speed (m/s) whose friction is an observation: just after a stop the detector
 /// still reports sliding while the base is stuck (holding force, not friction).
 pub const MIN_SPEED: f32 = 2e-3;
-/// Samples between two adoption checks.
+/// Samples between two adoption checks (a multiple of the firmware's batch, so that a check falls
+/// on a batch's end whether samples come one at a time or in batches).
 pub const CHECK_EVERY: u32 = 1024;
+const _: () = assert!(CHECK_EVERY.is_multiple_of(crate::pipeline::BATCH as u32));
+/// An identified law is adopted when its μ_slow and μ_fast are within this factor of the
+/// prior's (a fit outside means wrong data, not a friction law).
+pub const PLAUSIBLE_FACTOR: f32 = 2.0;
 /// Time constant of the slip speed's leak while stuck (s).
 pub const LEAK_S: f64 = 0.2;
 /// One sliding sample in this many is an observation of the law (the identification's cost per
@@ -55,6 +60,8 @@ pub struct SlipFriction {
     /// μ_fast − μ_slow.
     drop: f32,
     rate: f32,
+    /// The prior's μ_slow and μ_fast (the adoption's plausibility bounds).
+    prior: (f32, f32),
     /// Half the sample interval (s), and the leak factor per stuck sample.
     half_dt: f32,
     leak: f32,
@@ -84,11 +91,15 @@ impl SlipFriction {
         let FrictionLaw::VelocityDependent { mu_slow, rate_s_m } = law else {
             return None;
         };
+        if law.is_coulomb(mu_fast) {
+            return None;
+        }
         let dt = 1.0 / rate_hz;
         Some(Self {
             mu_fast: mu_fast as f32,
             drop: (mu_fast - mu_slow) as f32,
             rate: rate_s_m as f32,
+            prior: (mu_slow as f32, mu_fast as f32),
             half_dt: (0.5 * dt) as f32,
             leak: libm::exp(-dt / LEAK_S) as f32,
             inv_g: (1.0 / g) as f32,
@@ -141,24 +152,28 @@ impl SlipFriction {
         Some(self.mu(0.5 * (v0 + v1)))
     }
 
-    /// A run of stuck samples (base and table accelerations): the slip speed only (integrated and
-    /// leaking).
+    /// A stuck sample (base and table accelerations; NaN: unusable): the slip speed only
+    /// (integrated and leaking), as [`Self::sample`] does while stuck.
     #[inline(always)]
-    pub fn stuck_run(&mut self, base: &[f32], table: &[f32]) {
-        for (&b, &u) in base.iter().zip(table) {
-            let acc = if b.is_finite() && u.is_finite() {
-                b - u
-            } else {
-                self.prev_acc
-            };
-            self.v = (self.v + self.half_dt * (self.prev_acc + acc)) * self.leak;
-            self.prev_acc = acc;
-        }
+    pub fn stuck_sample(&mut self, base: f32, table: f32) {
+        let acc = if base.is_finite() && table.is_finite() {
+            base - table
+        } else {
+            self.prev_acc
+        };
+        self.v = (self.v + self.half_dt * (self.prev_acc + acc)) * self.leak;
+        self.prev_acc = acc;
     }
 
     /// A stick reported by the detector: the slip speed is 0.
     pub fn stick(&mut self) {
         self.v = 0.0;
+    }
+
+    /// The coefficient for the intervals a late slip start re-simulates (from the start to now):
+    /// μ at half the slip speed gained since (the per-sample values are not kept).
+    pub fn since_slip_start(&self) -> f32 {
+        self.mu(0.5 * self.v)
     }
 
     /// After `samples` more samples: adopt the identified law when a check is due and a fit
@@ -172,7 +187,12 @@ impl SlipFriction {
             return;
         }
         self.countdown = CHECK_EVERY;
-        if let Some(fit) = id.fit() {
+        let plausible =
+            |x: f32, prior: f32| x * PLAUSIBLE_FACTOR >= prior && x <= prior * PLAUSIBLE_FACTOR;
+        if let Some(fit) = id
+            .fit()
+            .filter(|f| plausible(f.mu_slow, self.prior.0) && plausible(f.mu_fast, self.prior.1))
+        {
             self.mu_fast = fit.mu_fast;
             self.drop = fit.mu_fast - fit.mu_slow;
             self.rate = fit.rate_s_m;

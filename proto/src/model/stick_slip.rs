@@ -142,8 +142,13 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot> Model for StickSlipMod
             return Ok(Pushed::No);
         }
         let phase = if e.is_stick() { 0 } else { e.level };
-        if let (true, Some(f)) = (e.is_stick(), self.friction.get_mut()) {
-            f.stick();
+        if let Some(f) = self.friction.get_mut() {
+            if e.is_stick() {
+                f.stick();
+            } else {
+                // The late event re-simulates the intervals since it with this coefficient.
+                self.est.set_friction(f.since_slip_start());
+            }
         }
         if e.kind == EventKind::SlipStart && e.age_samples <= self.max_age {
             if let Some(mu) = self.est.breakaway_coefficient(e.age_samples, self.fuse) {
@@ -183,7 +188,10 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot> Model for StickSlipMod
             };
             if self.est.phase() == SlidingPhase::Stuck {
                 // A run is in one phase (events start runs): stuck throughout, in blocks.
-                fr.stuck_run(base, table);
+                for ((f, &b), &u) in frames.iter().zip(base).zip(table) {
+                    let ok = f.flags & (flags::SATURATED | flags::MISSING) == 0;
+                    fr.stuck_sample(if ok { b } else { f32::NAN }, u);
+                }
                 let mut out = [0.0f32; BATCH];
                 if let Some(pred) = out.get_mut(..frames.len()) {
                     if self.est.update_block(table, top, pred).is_ok() {
@@ -194,6 +202,12 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot> Model for StickSlipMod
                 }
             } else {
                 for (((f, &u), &y), &b) in frames.iter_mut().zip(table).zip(top).zip(base) {
+                    // A saturated or missing base sample holds the slip acceleration.
+                    let b = if f.flags & (flags::SATURATED | flags::MISSING) == 0 {
+                        b
+                    } else {
+                        f32::NAN
+                    };
                     if let Some(mu) = fr.sample(b, u, y, true) {
                         self.est.set_friction(mu);
                     }
