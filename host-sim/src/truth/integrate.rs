@@ -1,5 +1,6 @@
 //! Sliding phases under a velocity-dependent friction law: no closed form, so the state
-//! (δ, δ', x2, ẋ2) is integrated by the Dormand–Prince 5(4) pair with error control.
+//! (δ, δ', x2, ẋ2) is integrated by the Dormand–Prince 5(4) pair with error control (by Rodas5
+//! when the phases are stiff: [`super::stiff`]).
 //!
 //! # Dense output
 //!
@@ -99,7 +100,7 @@ impl Model {
         -s * (self.mu_fast - self.mu_drop * x.exp()) * self.normal
     }
 
-    fn rhs(&self, s: f64, y: &Y, ug: f64) -> Y {
+    pub(super) fn rhs(&self, s: f64, y: &Y, ug: f64) -> Y {
         let top = -(self.two_xi_p * y[1] + self.p2 * y[0]);
         let f = self.sliding_force(s, y[3]);
         let x2dd = (f - self.m1 * top) / self.m2 - ug;
@@ -139,9 +140,19 @@ impl Piece {
         (y, err)
     }
 
+    /// One step of length `tau` of the model's method: Dormand–Prince, or Rodas5 when the
+    /// sliding phases are stiff ([`super::stiff`]).
+    pub(super) fn integrate(&self, m: &Model, dir: Direction, tau: f64) -> (Y, Y) {
+        if m.stiff {
+            self.rodas(m, dir, tau)
+        } else {
+            self.dopri(m, dir, tau)
+        }
+    }
+
     /// The scaled error norm of a step of length `h` (≤ 1: accept).
     pub(super) fn step_error(&self, m: &Model, dir: Direction, h: f64) -> f64 {
-        let (y, err) = self.dopri(m, dir, h);
+        let (y, err) = self.integrate(m, dir, h);
         let s0 = self.state;
         let y0 = [s0.delta, s0.delta_dot, s0.slip, s0.slip_vel];
         let unit = [m.disp_unit, m.vel_unit, m.disp_unit, m.vel_unit];

@@ -31,11 +31,14 @@
 //!
 //! Under a velocity-dependent law ([`ssvr_core::FrictionLaw`], [`TruthInput::with_friction`]) the
 //! sliding force is −s·μ(|ẋ2|)·(m1+m2)g and a sliding phase has no closed form: it is integrated
-//! by the error-controlled Dormand–Prince 5(4) pair, one accepted step per piece, with a dense
-//! output of order 5 (see [`integrate`](self) module docs); stuck phases stay closed form and events
+//! by the error-controlled Dormand–Prince 5(4) pair (or, when the law's rate makes it stiff, by
+//! Rodas5), one accepted step per piece, with a dense output of order 5 (one step of length τ
+//! from the piece's start); stuck phases stay closed form and events
 //! are located on the dense output as on the closed forms. A slide starts at μ_slow; while
 //! μ_slow·N < |F_req| < μ_fast·N the base can creep at a small speed instead of sticking.
-//! Against RK4 at dt = 1e-6 s: 9e-11 of the peak, events to 2e-12 s (tests/truth_friction.rs).
+//! Against RK4 at dt = 1e-6 s: 9e-11 of the peak, events to 2e-12 s (Rodas5 at a = 1000 s/m:
+//! 1.1e-10); a → ∞ reproduces the Coulomb truth (3e11 s/m: 1.7e-10 of the peak)
+//! (tests/truth_friction.rs).
 //!
 //! # Exactness
 //!
@@ -115,6 +118,7 @@ mod roots;
 mod sampler;
 mod simulate;
 mod sliding;
+mod stiff;
 mod stuck;
 
 pub use input::{TruthError, TruthInput};

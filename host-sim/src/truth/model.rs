@@ -7,6 +7,9 @@ use ssvr_core::closed_form::free_vibration::Kernel;
 use ssvr_core::{FrictionLaw, Regime, Structure};
 use std::f64::consts::PI;
 
+/// Relaxation rate of the slip speed (1/s) above which the integrated sliding phases are stiff.
+pub(super) const STIFF_RATE: f64 = 1e4;
+
 /// Grid points per shortest time scale (2π/ω of the fastest frequency or rate) for event bracketing.
 const GRID_PER_PERIOD: f64 = 64.0;
 
@@ -45,6 +48,9 @@ pub(super) struct Model {
     /// Sliding phases integrated ([`super::integrate`]) rather than in closed form: a
     /// velocity-dependent law (or a Coulomb one, forced, to check the integration).
     pub(super) integrated: bool,
+    /// Integrated sliding phases are stiff: the friction's relaxation a·(μ_fast − μ_slow)·N/m2
+    /// exceeds [`STIFF_RATE`]; they are integrated by Rodas5 ([`super::stiff`]).
+    pub(super) stiff: bool,
     /// The law μ(v) = mu_fast − mu_drop·e^{−rate·v} (mu_drop = 0, rate = 0 for Coulomb) and the
     /// normal force (m1+m2)g (N).
     pub(super) mu_fast: f64,
@@ -112,6 +118,12 @@ impl Model {
             tol_f: 1e-11 * mu_static * m_total * s.g(),
             tol_v: 1e-13 * s.gmu() / p,
             integrated: integrate || !law.is_coulomb(s.mu()),
+            stiff: match law {
+                FrictionLaw::Coulomb => false,
+                FrictionLaw::VelocityDependent { mu_slow, rate_s_m } => {
+                    rate_s_m * (s.mu() - mu_slow) * m_total * s.g() / m2 > STIFF_RATE
+                }
+            },
             mu_fast: s.mu(),
             mu_drop: s.mu() - law.at_rest(s.mu()),
             rate: match law {

@@ -17,7 +17,7 @@ impl Piece {
         tau: f64,
     ) -> (f64, f64, f64, f64) {
         if m.integrated {
-            let (y, _) = self.dopri(m, dir, tau);
+            let (y, _) = self.integrate(m, dir, tau);
             return (y[0], y[1], y[2], y[3]);
         }
         let s0 = self.state;
