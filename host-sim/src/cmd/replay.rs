@@ -16,7 +16,7 @@ use std::time::Instant;
 #[derive(clap::Args, Debug)]
 #[allow(rustdoc::invalid_html_tags)] // `<scene-stem>` is help text, not HTML
 pub struct ReplayArgs {
-    /// Scene file (TOML) with a [recording].
+    /// Scene file (TOML) with a `[recording]` table.
     pub scene: PathBuf,
     /// CSV output (default: <scene-stem>.replay.csv next to the scene file).
     #[arg(long)]
