@@ -196,21 +196,7 @@ fn difference(a: &Truth, b: &Truth) -> (f64, f64) {
             x.time_s,
         );
     }
-    let (mut ca, mut cb) = (a.sampler(), b.sampler());
-    let peak = a.peak_top_accel_m_s2();
-    let n = (a.duration_s() * 1e4).round() as usize;
-    let mut da = 0.0f64;
-    for k in 0..=n {
-        let t = k as f64 * 1e-4;
-        let (sa, sb) = (ca.sample(t).unwrap(), cb.sample(t).unwrap());
-        da = max_finite(
-            da,
-            (sa.top_accel_m_s2 - sb.top_accel_m_s2).abs() / peak,
-            "Δü1",
-            t,
-        );
-    }
-    (da, dt)
+    (top_difference(a, b), dt)
 }
 
 #[test]

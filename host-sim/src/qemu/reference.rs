@@ -14,7 +14,7 @@ use ssvr_core::closed_form::duhamel::{DuhamelClosedForm, Reversal, ReversalTrain
 use ssvr_core::math::Libm;
 use ssvr_core::stick_slip::{SlidingPhase, StickSlipEstimator};
 use ssvr_core::Structure;
-use ssvr_proto::model::SlipFriction;
+use ssvr_proto::model::{FrictionSlot, SlipFriction};
 use ssvr_proto::plan::MAX_HISTORY;
 use ssvr_proto::zeroing::Zeroing;
 use ssvr_proto::{flags, Frame, ModelKind as Model, Plan, Sample};
@@ -137,16 +137,9 @@ impl Reference {
                 last: (0, f64::NEG_INFINITY),
                 level_changes: 0,
                 out_of_order: 0,
+                // The law the firmware's model keeps (`StickSlipLawModel`'s slot).
                 friction: if plan.model == Model::StickSlip && plan.follows_law() {
-                    let p = &plan.specimen.structure;
-                    SlipFriction::new(
-                        plan.specimen.friction,
-                        p.friction_coefficient,
-                        (p.m1_kg, p.m2_kg, p.gravity_m_s2),
-                        plan.specimen.sample_rate_hz,
-                        plan.mode == ssvr_proto::model::Mode::Fuse,
-                    )
-                    .map(Box::new)
+                    <Option<SlipFriction> as FrictionSlot>::of_plan(plan).map(Box::new)
                 } else {
                     None
                 },

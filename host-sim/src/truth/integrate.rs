@@ -158,7 +158,8 @@ impl Piece {
         let unit = [m.disp_unit, m.vel_unit, m.disp_unit, m.vel_unit];
         (0..4)
             .map(|c| err[c].abs() / (TOL * (unit[c] + y0[c].abs().max(y[c].abs()))))
-            .fold(0.0, f64::max)
+            // (A NaN error stays NaN: `f64::max` would drop it and accept the step.)
+            .fold(0.0, |acc, x| if x > acc || x.is_nan() { x } else { acc })
     }
 }
 
