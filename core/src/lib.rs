@@ -18,6 +18,8 @@
 //!   ([`detect::displacement`]), or from the slip acceleration (base minus table accelerometer,
 //!   [`detect::acceleration`]).
 //! * [`stick_slip`]: the stick-slip aware estimator with online friction identification.
+//! * [`sliding_id`]: the sliding oscillator and the friction identified from the base
+//!   accelerometer alone.
 //! * [`friction`]: the friction law of the sliding interface (Coulomb, or velocity-dependent);
 //!   [`friction_id`]: its online identification from the sliding phases.
 //!
@@ -41,6 +43,7 @@ pub mod friction_id;
 pub mod math;
 pub mod oscillator_id;
 pub mod recursion;
+pub mod sliding_id;
 pub mod stick_slip;
 pub mod structure;
 

@@ -24,6 +24,7 @@ fn f32_against_f64(xi: f64, rate: f64, observer: f64) -> (f64, f64, f64) {
     .unwrap();
     let cfg = StickSlipConfig {
         observer_bandwidth: observer,
+        sliding_observer: observer > 0.0,
         identify_mu: false,
         ..StickSlipConfig::DEFAULT
     };

@@ -248,6 +248,7 @@ fn observed(s: &Structure, table: &TableMotion, duration: f64, bandwidth: f64) -
     let cfg = StickSlipConfig {
         identify_mu: false,
         observer_bandwidth: bandwidth,
+        sliding_observer: bandwidth > 0.0,
         ..StickSlipConfig::default()
     };
     let mut est = StickSlipEstimator::<f32, F32Poly, 64>::new(s, rate, cfg).unwrap();

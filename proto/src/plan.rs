@@ -117,9 +117,9 @@ pub struct Plan {
 }
 
 /// Version of the word layout ([`Plan::to_words`]).
-pub const WORDS_VERSION: u32 = 3;
+pub const WORDS_VERSION: u32 = 4;
 /// Length of a plan's words.
-pub const WORDS: usize = 49 + COEFFICIENT_WORDS;
+pub const WORDS: usize = 50 + COEFFICIENT_WORDS;
 
 impl Plan {
     /// The plan of `specimen` and `model`: every setting validated by the library.
@@ -281,6 +281,7 @@ impl Plan {
         w.u32(c.min_blocks);
         w.u32(c.identify_every);
         w.f64(c.observer_bandwidth);
+        w.u32(c.sliding_observer as u32);
         let mut i = 0;
         while i < COEFFICIENT_WORDS {
             w.u32(self.coefficients[i]);
@@ -358,6 +359,7 @@ impl Plan {
             min_blocks: r.u32(),
             identify_every: r.u32(),
             observer_bandwidth: r.f64(),
+            sliding_observer: r.u32() != 0,
         };
         let mut coefficients = [0u32; COEFFICIENT_WORDS];
         let mut i = 0;

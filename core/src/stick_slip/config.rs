@@ -32,12 +32,17 @@ pub struct StickSlipConfig {
     /// errors that switching between the sliding and the stuck dynamics at given times pumps up
     /// (undamped structures: ~20/s).
     pub observer_bandwidth: f64,
+    /// Measurement correction while the base slides (the sliding-phase observer, its bandwidth
+    /// a multiple of the sliding oscillator's own frequency: see `observer`). Independent of
+    /// the stuck one: predict mode corrects only its sliding state, from the top acceleration
+    /// the momentum balance gives with the base accelerometer.
+    pub sliding_observer: bool,
 }
 
 impl StickSlipConfig {
     /// The defaults (also [`Default`]): identify μ, do not adopt it, λ = 0.9999 per sample,
     /// blocks of 32 samples, 64 updates (2048 sliding samples) before adoption, an observer
-    /// bandwidth of 2p while stuck.
+    /// bandwidth of 2p while stuck, the sliding observer on.
     pub const DEFAULT: Self = Self {
         identify_mu: true,
         use_identified_mu: false,
@@ -45,6 +50,7 @@ impl StickSlipConfig {
         min_blocks: 64,
         identify_every: 32,
         observer_bandwidth: 2.0,
+        sliding_observer: true,
     };
 }
 

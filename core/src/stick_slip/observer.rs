@@ -36,7 +36,7 @@ pub(super) const SLIDE_WIDE: f64 = 4.0;
 /// measurement's noise in (unperturbed default scene: 0.059 % RMS with [`SLIDE_WIDE`]).
 pub(super) const SLIDE_NARROW: f64 = 2.0;
 
-/// The sliding-phase observer's per-sample gain for a bandwidth of `b`·p·√M times
+/// The sliding-phase observer's per-sample gain (zero unless `on`) for a bandwidth of p·√M times
 /// [`SLIDE_WIDE`] or [`SLIDE_NARROW`] (M = 1 + m1/m2; none beyond
 /// [`SLIDE_BANDWIDTH_MAX_PER_SAMPLE`] per sample, or for an overdamped sliding oscillator): as
 /// [`observer_gain`], with the sliding interval's transition (the relative oscillator of the
@@ -44,10 +44,10 @@ pub(super) const SLIDE_NARROW: f64 = 2.0;
 /// ü1 = −(z0 + 2ξ·z1) (the spring and dashpot force on the top mass, in either phase).
 pub(super) fn sliding_observer_gain<T: Real, M: Transcendentals<T>>(
     c: &StickSlipCoefficients<T>,
-    b: f64,
+    on: bool,
     wide: bool,
 ) -> [T; 2] {
-    if b.is_nan() || b <= 0.0 {
+    if !on {
         return [T::ZERO; 2];
     }
     let (p, mp) = (c.p.to_f64(), c.mp.to_f64());

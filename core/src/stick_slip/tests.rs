@@ -402,10 +402,12 @@ fn the_observer_error_decays_at_its_bandwidth() {
         let open = StickSlipConfig {
             identify_mu: false,
             observer_bandwidth: 0.0,
+            sliding_observer: false,
             ..StickSlipConfig::DEFAULT
         };
         let obs = StickSlipConfig {
             observer_bandwidth: b,
+            sliding_observer: true,
             ..open
         };
         let mut reference = StickSlipEstimator::<f64, Libm, 8>::new(&s, rate, open).unwrap();
@@ -450,10 +452,12 @@ fn the_sliding_observer_error_decays_at_its_bandwidth() {
         let open = StickSlipConfig {
             identify_mu: false,
             observer_bandwidth: 0.0,
+            sliding_observer: false,
             ..StickSlipConfig::DEFAULT
         };
         let obs = StickSlipConfig {
             observer_bandwidth: b,
+            sliding_observer: true,
             ..open
         };
         let w = 2.0 * b * s.p() * libm::sqrt(s.mass_ratio());

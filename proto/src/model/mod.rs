@@ -9,11 +9,13 @@
 //! * **stick-slip** ([`StickSlipModel`]): the base sticks and slides in turn: the stick-slip
 //!   estimator (f32, `F32Poly`) with online friction identification ([`STICK_SLIP_CONFIG`]).
 
+mod base_tuning;
 mod friction;
 mod rectangular;
 mod stick_slip;
 mod tuning;
 
+pub use base_tuning::{BaseSlot, BaseTuning};
 pub use friction::{FrictionReport, FrictionSlot, SlipFriction};
 pub use rectangular::RectangularModel;
 pub use stick_slip::{FixedBaseModel, StickSlipF32, StickSlipLawModel, StickSlipModel};
@@ -43,6 +45,7 @@ pub const STICK_SLIP_CONFIG: StickSlipConfig = StickSlipConfig {
 pub const FIXED_BASE_CONFIG: StickSlipConfig = StickSlipConfig {
     identify_mu: false,
     observer_bandwidth: 0.0,
+    sliding_observer: false,
     ..STICK_SLIP_CONFIG
 };
 

@@ -6,6 +6,7 @@
 //! beyond the plan's longest back-dating is clamped to it. A run of samples is predicted with
 //! `update_block` (bit for bit `update` on each sample).
 
+use super::base_tuning::{BaseSlot, BaseTuning};
 use super::friction::{FrictionReport, FrictionSlot, SlipFriction};
 use super::tuning::{OscillatorReport, Tuning};
 use super::{Breakaways, FromPlan, Mode, Model, ModelKind, Pushed, StaticFriction};
@@ -24,9 +25,16 @@ pub type StickSlipF32<const H: usize> = StickSlipEstimator<f32, F32Poly, H>;
 
 /// The stick-slip model (`EVENTS` true: events pushed) or, with `EVENTS` false, the fixed-base
 /// model ([`FixedBaseModel`]: no event pushed, so the image holds no event code). `F` keeps a
-/// velocity-dependent friction law ([`FrictionSlot`]; `()` for the fixed-base model).
+/// velocity-dependent friction law ([`FrictionSlot`]; `()` for the fixed-base model), `B` the
+/// predict mode's tuning from the base accelerometer ([`BaseSlot`]; `()` for the fixed-base
+/// model and under a velocity-dependent law).
 #[derive(Debug, Clone)]
-pub struct StickSlipModel<const H: usize, const EVENTS: bool = true, F: FrictionSlot = ()> {
+pub struct StickSlipModel<
+    const H: usize,
+    const EVENTS: bool = true,
+    F: FrictionSlot = (),
+    B: BaseSlot = Option<BaseTuning>,
+> {
     est: StickSlipF32<H>,
     max_age: f32,
     table: [f32; BATCH],
@@ -41,13 +49,16 @@ pub struct StickSlipModel<const H: usize, const EVENTS: bool = true, F: Friction
     breakaways: Breakaways,
     /// A velocity-dependent friction law (None: Coulomb).
     friction: F,
+    /// Predict mode: f, ξ and μ from the base accelerometer, and the top acceleration of the
+    /// sliding samples by the momentum balance (None: fuse mode).
+    base_tuning: B,
 }
 
 /// The estimator's inputs of a sample: the table acceleration, and the top acceleration (NaN
-/// when the sample is saturated or missing).
+/// when the sample is saturated or missing, or in predict mode: `fuse` false).
 #[inline(always)]
-fn inputs(channels: &[f32; CHANNELS], f: u8) -> (f32, f32) {
-    let top = if f & (flags::SATURATED | flags::MISSING) == 0 {
+fn inputs(channels: &[f32; CHANNELS], f: u8, fuse: bool) -> (f32, f32) {
+    let top = if fuse && f & (flags::SATURATED | flags::MISSING) == 0 {
         channels[Channel::TopAccel.index()]
     } else {
         f32::NAN
@@ -57,12 +68,14 @@ fn inputs(channels: &[f32; CHANNELS], f: u8) -> (f32, f32) {
 
 /// The stick-slip model following a velocity-dependent friction law (a plan whose specimen has
 /// one): μ per sliding sample from the slip speed, the law identified online in fuse mode.
-pub type StickSlipLawModel<const H: usize> = StickSlipModel<H, true, Option<SlipFriction>>;
+pub type StickSlipLawModel<const H: usize> = StickSlipModel<H, true, Option<SlipFriction>, ()>;
 
 /// The fixed-base model: the stick-slip estimator held stuck, no event pushed.
-pub type FixedBaseModel<const H: usize> = StickSlipModel<H, false, ()>;
+pub type FixedBaseModel<const H: usize> = StickSlipModel<H, false, (), ()>;
 
-impl<const H: usize, const EVENTS: bool, F: FrictionSlot> StickSlipModel<H, EVENTS, F> {
+impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
+    StickSlipModel<H, EVENTS, F, B>
+{
     /// The model on an estimator; events older than `max_age` samples are pushed with that age.
     pub fn new(est: StickSlipF32<H>, max_age: f32) -> Self {
         Self {
@@ -75,6 +88,7 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot> StickSlipModel<H, EVEN
             fuse: true,
             breakaways: Breakaways::default(),
             friction: F::none(),
+            base_tuning: B::none(),
         }
     }
 
@@ -90,8 +104,8 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot> StickSlipModel<H, EVEN
     }
 }
 
-impl<const H: usize, const EVENTS: bool, F: FrictionSlot> FromPlan
-    for StickSlipModel<H, EVENTS, F>
+impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot> FromPlan
+    for StickSlipModel<H, EVENTS, F, B>
 {
     /// The estimator restored from the plan's coefficients (computed in f64 and rounded to f32
     /// when the plan was made: the firmware needs no f64 start-up code), with the plan's
@@ -123,11 +137,14 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot> FromPlan
         let mut m = Self::new(est, plan.max_age as f32).with_tuning(tuning);
         m.fuse = plan.mode == Mode::Fuse;
         m.friction = F::of_plan(plan);
+        m.base_tuning = B::of_plan(plan);
         Ok(m)
     }
 }
 
-impl<const H: usize, const EVENTS: bool, F: FrictionSlot> Model for StickSlipModel<H, EVENTS, F> {
+impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot> Model
+    for StickSlipModel<H, EVENTS, F, B>
+{
     fn kind(&self) -> ModelKind {
         if EVENTS {
             ModelKind::StickSlip
@@ -150,6 +167,9 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot> Model for StickSlipMod
                 self.est.set_friction(f.since_slip_start());
             }
         }
+        if let Some(b) = self.base_tuning.get_mut() {
+            b.event(phase, e.age_samples);
+        }
         if e.kind == EventKind::SlipStart && e.age_samples <= self.max_age {
             if let Some(mu) = self.est.breakaway_coefficient(e.age_samples, self.fuse) {
                 self.breakaways.push(mu);
@@ -167,7 +187,7 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot> Model for StickSlipMod
     #[inline(always)]
     fn note_inputs(&mut self, i: usize, channels: &[f32; CHANNELS], flags: u8) {
         if let (Some(u), Some(y)) = (self.table.get_mut(i), self.top.get_mut(i)) {
-            (*u, *y) = inputs(channels, flags);
+            (*u, *y) = inputs(channels, flags, self.fuse);
             if let Some(b) = self.base.get_mut(i) {
                 *b = channels[Channel::BaseAccel.index()];
             }
@@ -223,6 +243,10 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot> Model for StickSlipMod
             }
             return;
         }
+        if self.base_tuning.get().is_some() {
+            self.predict_run_base(frames, from);
+            return;
+        }
         // The run's predictions (on the stack: static RAM is the board's budget).
         let mut out = [0.0f32; BATCH];
         let (Some(table), Some(top), Some(pred)) = (
@@ -251,7 +275,10 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot> Model for StickSlipMod
     }
 
     fn mu_estimate(&self) -> Option<MuEstimate> {
-        self.est.mu_estimate()
+        match self.base_tuning.get() {
+            Some(b) => b.mu_estimate(),
+            None => self.est.mu_estimate(),
+        }
     }
 
     fn revised(&self, sample: u64) -> Option<f32> {
@@ -259,7 +286,10 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot> Model for StickSlipMod
     }
 
     fn oscillator(&self) -> Option<OscillatorReport> {
-        self.tuning.as_ref().map(Tuning::report)
+        match self.base_tuning.get() {
+            Some(b) => Some(b.report()),
+            None => self.tuning.as_ref().map(Tuning::report),
+        }
     }
 
     fn friction_law(&self) -> Option<FrictionReport> {
@@ -271,6 +301,58 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot> Model for StickSlipMod
             self.breakaways.report()
         } else {
             None
+        }
+    }
+}
+
+impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
+    StickSlipModel<H, EVENTS, F, B>
+{
+    /// [`Model::predict_run`] in predict mode with a [`BaseTuning`]: the sliding samples' top
+    /// acceleration from the base accelerometer (the momentum balance) for the sliding observer,
+    /// the base samples to the identification, and its adoptions.
+    #[inline(always)]
+    fn predict_run_base(&mut self, frames: &mut [Frame], from: usize) {
+        let to = from + frames.len();
+        let (Some(bt), Some(table), Some(base)) = (
+            self.base_tuning.get_mut(),
+            self.table.get(from..to),
+            self.base.get(from..to),
+        ) else {
+            return;
+        };
+        let level = self.est.phase().level();
+        let (mut top, mut good) = ([0.0f32; BATCH], [0.0f32; BATCH]);
+        for (((y, g), f), &b) in top
+            .iter_mut()
+            .zip(good.iter_mut())
+            .zip(frames.iter())
+            .zip(base)
+        {
+            *g = if f.flags & (flags::SATURATED | flags::MISSING) == 0 {
+                b
+            } else {
+                f32::NAN
+            };
+            *y = bt.top_of(*g, level);
+        }
+        let n = frames.len();
+        let mut out = [0.0f32; BATCH];
+        if let (Some(top), Some(good), Some(pred)) = (top.get(..n), good.get(..n), out.get_mut(..n))
+        {
+            if self.est.update_block(table, top, pred).is_ok() {
+                for (f, &p) in frames.iter_mut().zip(pred.iter()) {
+                    f.prediction = p;
+                }
+            }
+            bt.push_run(good);
+        }
+        let (c, mu) = bt.check(n as u32);
+        if let Some(c) = c {
+            self.est.retune(c);
+        }
+        if let Some(mu) = mu {
+            self.est.set_friction(mu);
         }
     }
 }

@@ -35,11 +35,19 @@ pub const FORGETTING_PER_SAMPLE: f64 = 0.99999;
 #[derive(Debug, Clone)]
 pub struct Tuning {
     id: OscillatorIdentifier<f32>,
+    adoption: Adoption,
+    countdown: u32,
+}
+
+/// The adoption policy (module documentation) and the f and ξ in use: shared by the fuse mode's
+/// tuning from the top accelerometer and the predict mode's from the base accelerometer
+/// ([`BaseTuning`](super::base_tuning::BaseTuning)).
+#[derive(Debug, Clone)]
+pub struct Adoption {
     /// The prior, with the f and ξ in use.
     params: StructureParams,
     prior_f: f64,
     rate: f64,
-    countdown: u32,
     adoptions: u32,
 }
 
@@ -52,11 +60,8 @@ impl Tuning {
                 .ok()?;
         Some(Self {
             id,
-            params,
-            prior_f: params.natural_frequency_hz,
-            rate,
+            adoption: Adoption::new(params, rate),
             countdown: CHECK_EVERY,
-            adoptions: 0,
         })
     }
 
@@ -73,12 +78,35 @@ impl Tuning {
             return None;
         }
         self.countdown = CHECK_EVERY;
-        self.adopt()
+        let e = self.id.estimate()?;
+        self.adoption.adopt(&e)
     }
 
+    /// The identifier's estimate.
+    pub fn estimate(&self) -> Option<OscillatorEstimate> {
+        self.id.estimate()
+    }
+
+    /// The f (Hz) and ξ in use, and how many times they were adopted.
+    pub fn in_use(&self) -> (f64, f64, u32) {
+        self.adoption.in_use()
+    }
+}
+
+impl Adoption {
+    /// The prior `params` in use, coefficients for `rate`.
+    pub fn new(params: StructureParams, rate: f64) -> Self {
+        Self {
+            params,
+            prior_f: params.natural_frequency_hz,
+            rate,
+            adoptions: 0,
+        }
+    }
+
+    /// The coefficients of an estimate the policy adopts, if it does.
     #[inline(never)]
-    fn adopt(&mut self) -> Option<StickSlipCoefficients<f32>> {
-        let e = self.id.estimate()?;
+    pub fn adopt(&mut self, e: &OscillatorEstimate) -> Option<StickSlipCoefficients<f32>> {
         let (f, xi) = (e.natural_frequency_hz, e.damping_ratio);
         let (f_use, xi_use) = (self.params.natural_frequency_hz, self.params.damping_ratio);
         let plausible = f > 0.5 * self.prior_f && f < 2.0 * self.prior_f;
@@ -106,11 +134,6 @@ impl Tuning {
         self.params = params;
         self.adoptions = self.adoptions.saturating_add(1);
         Some(c)
-    }
-
-    /// The identifier's estimate.
-    pub fn estimate(&self) -> Option<OscillatorEstimate> {
-        self.id.estimate()
     }
 
     /// The f (Hz) and ξ in use, and how many times they were adopted.

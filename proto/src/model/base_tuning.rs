@@ -1,0 +1,283 @@
+//! Predict mode's tuning from the base accelerometer ([`BaseTuning`]): predict mode never reads
+//! the top accelerometer, but while the base slides the base accelerometer alone gives
+//!
+//! * **the sliding oscillator and the friction** ([`ssvr_core::sliding_id`]): ω = p·√M,
+//!   ζ = ξ·√M and μ·g, free of the model's state. With the prior's M = 1 + m1/m2 they give f and
+//!   ξ, adopted by the policy of the fuse mode's tuning ([`Adoption`]), and μ, adopted once known
+//!   to [`MAX_REL_STD_MU`];
+//! * **the top acceleration** by the momentum balance of the two masses,
+//!   m1·ü1 + m2·ü2 = μ·(m1 + m2)·g·s (s the friction force's direction, the phase level):
+//!   ü1 = (1 + r)·μ·g·s − r·ü2 with r = m2/m1. The model's sliding-phase observer corrects its
+//!   state towards it (its error is r times the base accelerometer's, ~1/17 on the Table 1
+//!   specimen), so each stuck phase starts from the right state.
+//!
+//! **Labels.** The detector reports events late (their age): a base sample waits [`DELAY`]
+//! samples before it goes to the identifier, so that every event reported meanwhile labels it
+//! with its true phase; samples within [`GUARD`] samples of an event are not used.
+//!
+//! Coulomb friction only (a velocity-dependent law changes μ along the slide: its model keeps
+//! the prior's law in predict mode). All in f32 but the adoption's f64 at a check: the firmware
+//! and the host run this same code.
+
+use super::tuning::{Adoption, OscillatorReport};
+use ssvr_core::oscillator_id::OscillatorEstimate;
+use ssvr_core::sliding_id::{SlidingEstimate, SlidingIdentifier};
+use ssvr_core::stick_slip::{MuEstimate, StickSlipCoefficients};
+use ssvr_core::StructureParams;
+
+/// Samples a base sample waits for late events before it is labelled (at least the
+/// detector's longest reporting delay at the scenes' rates: its `max_age_samples`).
+pub const DELAY: usize = 128;
+/// Samples either side of an event's time that are not used.
+pub const GUARD: f32 = 2.0;
+/// Forgetting per identification row (a memory of ~10⁵ rows: tens of seconds of sliding).
+pub const FORGETTING_PER_ROW: f64 = 0.99999;
+/// Samples between two adoption checks: a check solves 4×4 normal equations in f64, and an
+/// early adoption shortens the time a wrong prior's μ is in use (a multiple of the firmware's
+/// batch, so that a check falls on a batch's end however the samples come).
+pub const CHECK_EVERY: u32 = 256;
+const _: () = assert!(CHECK_EVERY.is_multiple_of(crate::pipeline::BATCH as u32));
+/// Largest relative standard deviation of μ̂ for adoption (a μ known to 2 % is far better than
+/// a prior 10–25 % off, and later checks refine it).
+pub const MAX_REL_STD_MU: f64 = 2e-2;
+/// Smallest relative change of μ worth adopting.
+pub const MIN_REL_CHANGE_MU: f64 = 1e-4;
+
+/// The base accelerometer's tuning of the predict mode (module documentation).
+#[derive(Debug, Clone)]
+pub struct BaseTuning {
+    id: SlidingIdentifier<f32>,
+    /// The delay line: base samples and their phase labels; `at` the slot of the next sample.
+    ring: [f32; DELAY],
+    labels: [i8; DELAY],
+    at: usize,
+    filled: usize,
+    /// The phase level of the samples to come, and how many of them the guard drops.
+    level: i8,
+    skip: u8,
+    adoption: Adoption,
+    /// √M of the prior; r = m2/m1; g.
+    root_m: f64,
+    r: f32,
+    g: f32,
+    prior_mu: f64,
+    mu_use: f32,
+    /// The standard deviation of the μ in use (infinite: the prior's).
+    mu_std_use: f64,
+    mu_adoptions: u32,
+    countdown: u32,
+    last: Option<SlidingEstimate>,
+}
+
+impl BaseTuning {
+    /// The tuning of the prior `params` at `rate` (`None` if the identifier cannot be set up).
+    pub fn new(params: StructureParams, rate: f64) -> Option<Self> {
+        let m = 1.0 + params.m1_kg / params.m2_kg;
+        let root_m = libm::sqrt(m);
+        let omega = 2.0 * core::f64::consts::PI * params.natural_frequency_hz * root_m;
+        let id = SlidingIdentifier::new(rate, omega, FORGETTING_PER_ROW).ok()?;
+        Some(Self {
+            id,
+            ring: [0.0; DELAY],
+            labels: [0; DELAY],
+            at: 0,
+            filled: 0,
+            level: 0,
+            skip: 0,
+            adoption: Adoption::new(params, rate),
+            root_m,
+            r: (params.m2_kg / params.m1_kg) as f32,
+            g: params.gravity_m_s2 as f32,
+            prior_mu: params.friction_coefficient,
+            mu_use: params.friction_coefficient as f32,
+            mu_std_use: f64::INFINITY,
+            mu_adoptions: 0,
+            countdown: CHECK_EVERY,
+            last: None,
+        })
+    }
+
+    /// An event `age` samples before the next sample, setting the phase `level` (0: stuck):
+    /// the samples since it are relabelled, those within [`GUARD`] of it dropped.
+    pub fn event(&mut self, level: i8, age: f32) {
+        let reach = libm::ceilf(age + GUARD).clamp(0.0, self.filled as f32) as usize;
+        for d in 1..=reach {
+            let slot = (self.at + DELAY - d) % DELAY;
+            let df = d as f32;
+            if let Some(l) = self.labels.get_mut(slot) {
+                if df < age - GUARD {
+                    *l = level;
+                } else if df <= age + GUARD {
+                    *l = 0;
+                }
+            }
+        }
+        self.level = level;
+        let ahead = GUARD - age;
+        self.skip = if ahead >= 0.0 { ahead as u8 + 1 } else { 0 };
+    }
+
+    /// The top acceleration of a sliding sample from its base acceleration `base` (NaN when
+    /// stuck: `level` 0).
+    #[inline(always)]
+    pub fn top_of(&self, base: f32, level: i8) -> f32 {
+        if level == 0 {
+            return f32::NAN;
+        }
+        let s = if level > 0 { 1.0 } else { -1.0 };
+        (1.0 + self.r) * self.mu_use * self.g * s - self.r * base
+    }
+
+    /// A run of base samples (NaN: missing or saturated) in the phase of the last event.
+    #[inline(always)]
+    pub fn push_run(&mut self, base: &[f32]) {
+        for &b in base {
+            let (Some(y), Some(l)) = (self.ring.get_mut(self.at), self.labels.get_mut(self.at))
+            else {
+                return;
+            };
+            if self.filled == DELAY {
+                self.id.push(*y, *l);
+            } else {
+                self.filled += 1;
+            }
+            *y = b;
+            *l = if self.skip > 0 {
+                self.skip -= 1;
+                0
+            } else {
+                self.level
+            };
+            self.at = if self.at + 1 == DELAY { 0 } else { self.at + 1 };
+        }
+    }
+
+    /// Count `samples` samples; at a check, the coefficients (f, ξ) and the friction coefficient
+    /// to adopt, if any.
+    pub fn check(&mut self, samples: u32) -> (Option<StickSlipCoefficients<f32>>, Option<f32>) {
+        if self.countdown > samples {
+            self.countdown -= samples;
+            return (None, None);
+        }
+        self.countdown = CHECK_EVERY;
+        self.adopt()
+    }
+
+    #[inline(never)]
+    fn adopt(&mut self) -> (Option<StickSlipCoefficients<f32>>, Option<f32>) {
+        let Some(e) = self.id.estimate() else {
+            return (None, None);
+        };
+        self.last = Some(e);
+        let coefficients = self.adoption.adopt(&self.oscillator(&e));
+        let mu = e.friction_accel / self.g as f64;
+        let sd = e.friction_accel_std / self.g as f64;
+        let plausible = mu > 0.5 * self.prior_mu && mu < 2.0 * self.prior_mu;
+        let change = libm::fabs(mu - self.mu_use as f64);
+        // A new μ̂ when it differs significantly, or when it is known twice as well as the one
+        // in use (the sliding top acceleration's error is (1 + r)·g times μ's).
+        let better = sd < 0.5 * self.mu_std_use || change > 3.0 * sd;
+        let adopt =
+            plausible && sd < MAX_REL_STD_MU * mu && change > MIN_REL_CHANGE_MU * mu && better;
+        let mu = adopt.then(|| {
+            self.mu_use = mu as f32;
+            self.mu_std_use = sd;
+            self.mu_adoptions = self.mu_adoptions.saturating_add(1);
+            self.mu_use
+        });
+        (coefficients, mu)
+    }
+
+    /// The fixed-base oscillator of a sliding one, with the prior's M.
+    fn oscillator(&self, e: &SlidingEstimate) -> OscillatorEstimate {
+        let to_hz = 1.0 / (2.0 * core::f64::consts::PI * self.root_m);
+        OscillatorEstimate {
+            natural_frequency_hz: e.omega * to_hz,
+            natural_frequency_std_hz: e.omega_std * to_hz,
+            damping_ratio: e.damping_ratio / self.root_m,
+            damping_ratio_std: e.damping_ratio_std / self.root_m,
+            blocks: e.rows as u32,
+        }
+    }
+
+    /// The last check's oscillator estimate.
+    pub fn estimate(&self) -> Option<OscillatorEstimate> {
+        self.last.as_ref().map(|e| self.oscillator(e))
+    }
+
+    /// The last check's friction coefficient.
+    pub fn mu_estimate(&self) -> Option<MuEstimate> {
+        self.last.as_ref().map(|e| MuEstimate {
+            mu: e.friction_accel / self.g as f64,
+            std: e.friction_accel_std / self.g as f64,
+            blocks: e.rows as u32,
+        })
+    }
+
+    /// The f (Hz) and ξ in use, and how many times they were adopted.
+    pub fn in_use(&self) -> (f64, f64, u32) {
+        self.adoption.in_use()
+    }
+}
+
+impl BaseTuning {
+    /// The report of [`Model::oscillator`](super::Model::oscillator).
+    pub fn report(&self) -> OscillatorReport {
+        let (f, xi, n) = self.in_use();
+        OscillatorReport {
+            estimate: self.estimate(),
+            natural_frequency_hz: f,
+            damping_ratio: xi,
+            adoptions: n,
+        }
+    }
+}
+
+/// Where the stick-slip model keeps a [`BaseTuning`]: `Option<BaseTuning>` (the Coulomb
+/// stick-slip model: `Some` in predict mode), or `()` (the fixed-base model and the model of a
+/// velocity-dependent law: no code, no storage).
+pub trait BaseSlot: Clone + core::fmt::Debug {
+    /// No tuning.
+    fn none() -> Self;
+    /// The slot of a plan.
+    fn of_plan(plan: &crate::plan::Plan) -> Self;
+    /// The tuning, if any.
+    fn get(&self) -> Option<&BaseTuning>;
+    /// The tuning, if any.
+    fn get_mut(&mut self) -> Option<&mut BaseTuning>;
+}
+
+impl BaseSlot for () {
+    fn none() -> Self {}
+    fn of_plan(_: &crate::plan::Plan) -> Self {}
+    #[inline(always)]
+    fn get(&self) -> Option<&BaseTuning> {
+        None
+    }
+    #[inline(always)]
+    fn get_mut(&mut self) -> Option<&mut BaseTuning> {
+        None
+    }
+}
+
+impl BaseSlot for Option<BaseTuning> {
+    fn none() -> Self {
+        None
+    }
+    fn of_plan(plan: &crate::plan::Plan) -> Self {
+        match plan.mode {
+            super::Mode::Predict => {
+                BaseTuning::new(plan.specimen.structure, plan.specimen.sample_rate_hz)
+            }
+            super::Mode::Fuse => None,
+        }
+    }
+    #[inline(always)]
+    fn get(&self) -> Option<&BaseTuning> {
+        self.as_ref()
+    }
+    #[inline(always)]
+    fn get_mut(&mut self) -> Option<&mut BaseTuning> {
+        self.as_mut()
+    }
+}
