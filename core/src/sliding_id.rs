@@ -42,7 +42,7 @@ pub const OMEGA_H: f64 = 0.25;
 /// Largest decimation (samples per block).
 pub const MAX_DECIMATION: u32 = 64;
 /// Rows needed before an estimate.
-pub const MIN_ROWS: f64 = 32.0;
+pub const MIN_ROWS: f64 = 8.0;
 /// Products kept per row: the 10 of the symmetric 4×4 normal matrix, the 4 of the right-hand
 /// side, and the target's square.
 const K: usize = 15;
@@ -64,6 +64,9 @@ pub struct SlidingEstimate {
     pub friction_accel_std: f64,
     /// The accelerometer's offset (m/s²): what remains of it after the corrections upstream.
     pub offset: f64,
+    /// Its standard deviation (m/s²; 0 while one direction of sliding is seen: the offset is
+    /// then taken as 0).
+    pub offset_std: f64,
     /// Rows (block triples) used, with forgetting.
     pub rows: f64,
 }
@@ -87,6 +90,8 @@ pub struct SlidingIdentifier<T> {
     /// The pages' sums (f64), with forgetting per page.
     sums: [f64; K],
     rows: f64,
+    /// Rows ever added (wrapping).
+    added: u32,
     rho_page: f64,
     /// Block duration (s).
     h: f64,
@@ -128,6 +133,7 @@ impl<T: Real> SlidingIdentifier<T> {
             page_rows: 0,
             sums: [0.0; K],
             rows: 0.0,
+            added: 0,
             rho_page: (0..PAGE).fold(1.0, |a, _| a * forgetting),
             h: d / sample_rate_hz,
         })
@@ -136,6 +142,11 @@ impl<T: Real> SlidingIdentifier<T> {
     /// Samples per block.
     pub fn decimation(&self) -> u32 {
         self.decimation
+    }
+
+    /// Rows ever added (wrapping): an estimate changes only when it does.
+    pub fn rows_added(&self) -> u32 {
+        self.added
     }
 
     /// One sample of the base acceleration `y` with its phase `level`: ±1 for a sample inside
@@ -186,6 +197,7 @@ impl<T: Real> SlidingIdentifier<T> {
             }
             self.page[k] += t * t;
             self.page_rows += 1;
+            self.added = self.added.wrapping_add(1);
             if self.page_rows >= PAGE {
                 self.fold();
             }
@@ -265,6 +277,9 @@ impl<T: Real> SlidingIdentifier<T> {
         // First-order errors (small ωh: α ≈ (ωh)², β ≈ 2ζωh).
         let var = |i: usize, j: usize| sigma2 * inv[i][j];
         let (va, vb, vg, vag) = (var(0, 0), var(1, 1), var(2, 2), -var(0, 2));
+        let (vd, vad) = (var(3, 3), -var(0, 3));
+        let off = delta / alpha;
+        let var_off = (vd - 2.0 * off * vad + off * off * va) / (alpha * alpha);
         let rel_a = libm::sqrt(va) / alpha;
         let omega_std = 0.5 * omega * rel_a;
         let zeta_std = zeta * libm::sqrt(vb / (beta * beta) + 0.25 * rel_a * rel_a);
@@ -277,7 +292,8 @@ impl<T: Real> SlidingIdentifier<T> {
             damping_ratio_std: zeta_std,
             friction_accel: fa,
             friction_accel_std: libm::sqrt(libm::fmax(var_fa, 0.0)),
-            offset: delta / alpha,
+            offset: off,
+            offset_std: libm::sqrt(libm::fmax(var_off, 0.0)),
             rows,
         })
     }
@@ -307,7 +323,7 @@ fn invert_spd<const N: usize>(a: &[[f64; N]; N]) -> Option<[[f64; N]; N]> {
                 sum -= l[i][k] * l[j][k];
             }
             if i == j {
-                if !(sum > 1e-9 * a[i][i].abs()) || !sum.is_finite() {
+                if sum <= 1e-9 * a[i][i].abs() || !sum.is_finite() {
                     return None;
                 }
                 l[i][i] = libm::sqrt(sum);

@@ -24,8 +24,12 @@ impl BenchModel for RectangularModel {
     }
 }
 
-impl<const H: usize, const EVENTS: bool, F: ssvr_proto::model::FrictionSlot> BenchModel
-    for StickSlipModel<H, EVENTS, F>
+impl<
+        const H: usize,
+        const EVENTS: bool,
+        F: ssvr_proto::model::FrictionSlot,
+        B: ssvr_proto::model::BaseSlot,
+    > BenchModel for StickSlipModel<H, EVENTS, F, B>
 {
     /// The stick-slip model (events on) or the fixed-base model (events off).
     fn estimator_blocks(&self, t: &mut Ticks, plan: &Plan) -> (u32, u32, u32, u32) {

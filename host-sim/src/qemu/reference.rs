@@ -12,9 +12,9 @@ use crate::scene::Scene;
 use anyhow::{anyhow, Result};
 use ssvr_core::closed_form::duhamel::{DuhamelClosedForm, Reversal, ReversalTrain};
 use ssvr_core::math::Libm;
-use ssvr_core::stick_slip::{SlidingPhase, StickSlipEstimator};
+use ssvr_core::stick_slip::{SlidingPhase, StickSlipCoefficients, StickSlipEstimator};
 use ssvr_core::Structure;
-use ssvr_proto::model::{FrictionSlot, SlipFriction};
+use ssvr_proto::model::{BaseSlot, BaseTuning, FrictionSlot, Mode, SlipFriction};
 use ssvr_proto::plan::MAX_HISTORY;
 use ssvr_proto::zeroing::Zeroing;
 use ssvr_proto::{flags, Frame, ModelKind as Model, Plan, Sample};
@@ -106,6 +106,14 @@ pub enum Reference {
         friction: Option<Box<SlipFriction>>,
         /// The base offset the pipeline removes (its detector's), for the friction's slip speed.
         base_offset: crate::pipeline::OffsetTracker,
+        /// Predict mode (the top accelerometer is not read).
+        predict: bool,
+        /// Predict mode's tuning from the base accelerometer: the firmware's own code (f32)
+        /// gives the sliding samples' top acceleration and the adoptions, applied to the f64
+        /// estimator (coefficients re-derived in f64).
+        base_tuning: Option<Box<BaseTuning>>,
+        /// The prior, with the f and ξ in use.
+        prior: ssvr_core::StructureParams,
     },
 }
 
@@ -144,6 +152,13 @@ impl Reference {
                     None
                 },
                 base_offset: crate::pipeline::base_offset_tracker(plan)?,
+                predict: plan.mode == Mode::Predict,
+                base_tuning: if plan.model == Model::StickSlip && !plan.follows_law() {
+                    <Option<BaseTuning> as BaseSlot>::of_plan(plan).map(Box::new)
+                } else {
+                    None
+                },
+                prior: plan.specimen.structure,
             },
         })
     }
@@ -175,6 +190,9 @@ impl Reference {
                 out_of_order,
                 friction,
                 base_offset,
+                predict,
+                base_tuning,
+                prior,
             } => {
                 let mut channels = s.channels;
                 zeroing.apply(k as u32, &mut channels, f.flags);
@@ -187,6 +205,9 @@ impl Reference {
                         } else {
                             est.set_friction(f64::from(fr.since_slip_start()));
                         }
+                    }
+                    if let Some(b) = base_tuning.as_mut() {
+                        b.event(phase, e.age_samples);
                     }
                     let age = e.age_samples.min(*max_age);
                     est.push_event(phase, f64::from(age)).map_err(|err| {
@@ -201,13 +222,37 @@ impl Reference {
                     }
                     *last = (phase, last.1.max(t));
                 }
-                let top_valid = f.flags & (flags::SATURATED | flags::MISSING) == 0;
-                let top = if top_valid {
+                let valid = f.flags & (flags::SATURATED | flags::MISSING) == 0;
+                let top = if valid && !*predict {
                     f64::from(channels[ssvr_proto::Channel::TopAccel.index()])
                 } else {
                     f64::NAN
                 };
                 let table = channels[ssvr_proto::Channel::TableAccel.index()];
+                if let Some(b) = base_tuning.as_mut() {
+                    let base = if valid {
+                        channels[ssvr_proto::Channel::BaseAccel.index()]
+                    } else {
+                        f32::NAN
+                    };
+                    let top = b.top_of(base, est.phase().level());
+                    let y = est.update(f64::from(table - b.offset()), f64::from(top));
+                    b.push_run(&[base]);
+                    let (c, mu) = b.check(1);
+                    if c.is_some() {
+                        let (f, xi, _) = b.in_use();
+                        prior.natural_frequency_hz = f;
+                        prior.damping_ratio = xi;
+                        let c = Structure::new(*prior)
+                            .and_then(|s| StickSlipCoefficients::<f64>::new(&s, rate))
+                            .map_err(|e| anyhow!("the adopted f, ξ are invalid: {e:?}"))?;
+                        est.retune(c);
+                    }
+                    if let Some(mu) = mu {
+                        est.set_friction(f64::from(mu));
+                    }
+                    return Ok(y);
+                }
                 if let Some(fr) = friction {
                     let sliding = est.phase() != SlidingPhase::Stuck;
                     let base = if f.flags & (flags::SATURATED | flags::MISSING) == 0 {

@@ -32,11 +32,18 @@ pub const DELAY: usize = 128;
 pub const GUARD: f32 = 2.0;
 /// Forgetting per identification row (a memory of ~10⁵ rows: tens of seconds of sliding).
 pub const FORGETTING_PER_ROW: f64 = 0.99999;
-/// Samples between two adoption checks: a check solves 4×4 normal equations in f64, and an
-/// early adoption shortens the time a wrong prior's μ is in use (a multiple of the firmware's
-/// batch, so that a check falls on a batch's end however the samples come).
-pub const CHECK_EVERY: u32 = 256;
-const _: () = assert!(CHECK_EVERY.is_multiple_of(crate::pipeline::BATCH as u32));
+/// Samples between two adoption checks until μ̂ is first adopted (at most [`FAST_CHECKS`]
+/// estimates): an early adoption shortens the time a wrong prior's μ is in use (a multiple of the firmware's batch, so that a check
+/// falls on a batch's end however the samples come).
+pub const FIRST_CHECK_EVERY: u32 = 128;
+/// … and once it is: a check solves 4×4 normal equations in f64 (thousands of M4F
+/// instructions), and the estimate changes slowly. A check without a new row since the last
+/// one solves nothing.
+pub const CHECK_EVERY: u32 = 1024;
+/// Estimates made [`FIRST_CHECK_EVERY`] samples apart at most.
+pub const FAST_CHECKS: u8 = 16;
+const _: () = assert!(FIRST_CHECK_EVERY.is_multiple_of(crate::pipeline::BATCH as u32));
+const _: () = assert!(CHECK_EVERY.is_multiple_of(FIRST_CHECK_EVERY));
 /// Largest relative standard deviation of μ̂ for adoption (a μ known to 2 % is far better than
 /// a prior 10–25 % off, and later checks refine it).
 pub const MAX_REL_STD_MU: f64 = 2e-2;
@@ -62,9 +69,19 @@ pub struct BaseTuning {
     g: f32,
     prior_mu: f64,
     mu_use: f32,
-    /// The standard deviation of the μ in use (infinite: the prior's).
+    /// The standard deviation of the μ in use (0: the prior's, replaced only by a μ̂ that
+    /// differs from it significantly).
     mu_std_use: f64,
+    /// The same for the offset in use (the prior's: 0).
+    offset_std_use: f64,
     mu_adoptions: u32,
+    /// Rows the identifier had at the last estimate.
+    rows_seen: u32,
+    /// Estimates left at the first checks' interval.
+    fast_checks: u8,
+    /// The table accelerometer's offset in use (m/s²): what the identification finds on the
+    /// base accelerometer, whose offset relative to the table's the detector removes.
+    offset: f32,
     countdown: u32,
     last: Option<SlidingEstimate>,
 }
@@ -90,9 +107,13 @@ impl BaseTuning {
             g: params.gravity_m_s2 as f32,
             prior_mu: params.friction_coefficient,
             mu_use: params.friction_coefficient as f32,
-            mu_std_use: f64::INFINITY,
+            mu_std_use: 0.0,
+            offset_std_use: 0.0,
             mu_adoptions: 0,
-            countdown: CHECK_EVERY,
+            rows_seen: 0,
+            fast_checks: FAST_CHECKS,
+            offset: 0.0,
+            countdown: FIRST_CHECK_EVERY,
             last: None,
         })
     }
@@ -125,7 +146,14 @@ impl BaseTuning {
             return f32::NAN;
         }
         let s = if level > 0 { 1.0 } else { -1.0 };
-        (1.0 + self.r) * self.mu_use * self.g * s - self.r * base
+        (1.0 + self.r) * self.mu_use * self.g * s - self.r * (base - self.offset)
+    }
+
+    /// The table (and base) accelerometer's offset in use (m/s²), to remove from the model's
+    /// table input.
+    #[inline(always)]
+    pub fn offset(&self) -> f32 {
+        self.offset
     }
 
     /// A run of base samples (NaN: missing or saturated) in the phase of the last event.
@@ -159,8 +187,21 @@ impl BaseTuning {
             self.countdown -= samples;
             return (None, None);
         }
-        self.countdown = CHECK_EVERY;
-        self.adopt()
+        self.countdown = if self.fast_checks > 0 && self.mu_adoptions == 0 {
+            FIRST_CHECK_EVERY
+        } else {
+            CHECK_EVERY
+        };
+        let rows = self.id.rows_added();
+        if rows == self.rows_seen {
+            return (None, None);
+        }
+        self.rows_seen = rows;
+        let adopted = self.adopt();
+        if self.last.is_some() {
+            self.fast_checks = self.fast_checks.saturating_sub(1);
+        }
+        adopted
     }
 
     #[inline(never)]
@@ -174,9 +215,20 @@ impl BaseTuning {
         let sd = e.friction_accel_std / self.g as f64;
         let plausible = mu > 0.5 * self.prior_mu && mu < 2.0 * self.prior_mu;
         let change = libm::fabs(mu - self.mu_use as f64);
-        // A new μ̂ when it differs significantly, or when it is known twice as well as the one
-        // in use (the sliding top acceleration's error is (1 + r)·g times μ's).
+        // A new μ̂ when it differs significantly from the μ in use, or when it is known twice as
+        // well as an earlier μ̂ in use (the sliding top acceleration's error is (1 + r)·g times
+        // μ's): a right prior stays, a wrong one goes at the first significant estimate.
         let better = sd < 0.5 * self.mu_std_use || change > 3.0 * sd;
+        // The offset likewise, from a fit whose friction is plausible and known.
+        let off_change = libm::fabs(e.offset - self.offset as f64);
+        if plausible
+            && sd < MAX_REL_STD_MU * mu
+            && e.offset_std > 0.0
+            && (off_change > 3.0 * e.offset_std || e.offset_std < 0.5 * self.offset_std_use)
+        {
+            self.offset = e.offset as f32;
+            self.offset_std_use = e.offset_std;
+        }
         let adopt =
             plausible && sd < MAX_REL_STD_MU * mu && change > MIN_REL_CHANGE_MU * mu && better;
         let mu = adopt.then(|| {
@@ -237,6 +289,8 @@ impl BaseTuning {
 /// stick-slip model: `Some` in predict mode), or `()` (the fixed-base model and the model of a
 /// velocity-dependent law: no code, no storage).
 pub trait BaseSlot: Clone + core::fmt::Debug {
+    /// Whether it can hold a tuning.
+    const TUNES: bool;
     /// No tuning.
     fn none() -> Self;
     /// The slot of a plan.
@@ -248,6 +302,7 @@ pub trait BaseSlot: Clone + core::fmt::Debug {
 }
 
 impl BaseSlot for () {
+    const TUNES: bool = false;
     fn none() -> Self {}
     fn of_plan(_: &crate::plan::Plan) -> Self {}
     #[inline(always)]
@@ -261,6 +316,7 @@ impl BaseSlot for () {
 }
 
 impl BaseSlot for Option<BaseTuning> {
+    const TUNES: bool = true;
     fn none() -> Self {
         None
     }

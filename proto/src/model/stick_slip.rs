@@ -70,6 +70,10 @@ fn inputs(channels: &[f32; CHANNELS], f: u8, fuse: bool) -> (f32, f32) {
 /// one): μ per sliding sample from the slip speed, the law identified online in fuse mode.
 pub type StickSlipLawModel<const H: usize> = StickSlipModel<H, true, Option<SlipFriction>, ()>;
 
+/// The Coulomb stick-slip model without predict mode's tuning from the base accelerometer (a
+/// fuse-mode plan's: its image holds no code of it).
+pub type StickSlipFuseModel<const H: usize> = StickSlipModel<H, true, (), ()>;
+
 /// The fixed-base model: the stick-slip estimator held stuck, no event pushed.
 pub type FixedBaseModel<const H: usize> = StickSlipModel<H, false, (), ()>;
 
@@ -125,6 +129,10 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot> FromPlan
             .friction
             .is_coulomb(plan.specimen.structure.friction_coefficient);
         if EVENTS && law != F::FOLLOWS_LAW {
+            return Err(PlanError::Model);
+        }
+        // A Coulomb predict-mode plan needs the model that tunes from the base accelerometer.
+        if EVENTS && !law && plan.mode == Mode::Predict && !B::TUNES {
             return Err(PlanError::Model);
         }
         let c = StickSlipCoefficients::from_bits(&plan.coefficients).ok_or(PlanError::Words)?;
@@ -322,12 +330,14 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
             return;
         };
         let level = self.est.phase().level();
-        let (mut top, mut good) = ([0.0f32; BATCH], [0.0f32; BATCH]);
-        for (((y, g), f), &b) in top
+        let off = bt.offset();
+        let (mut top, mut good, mut u) = ([0.0f32; BATCH], [0.0f32; BATCH], [0.0f32; BATCH]);
+        for ((((y, g), u), f), (&b, &t)) in top
             .iter_mut()
             .zip(good.iter_mut())
+            .zip(u.iter_mut())
             .zip(frames.iter())
-            .zip(base)
+            .zip(base.iter().zip(table))
         {
             *g = if f.flags & (flags::SATURATED | flags::MISSING) == 0 {
                 b
@@ -335,10 +345,12 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
                 f32::NAN
             };
             *y = bt.top_of(*g, level);
+            *u = t - off;
         }
         let n = frames.len();
         let mut out = [0.0f32; BATCH];
-        if let (Some(top), Some(good), Some(pred)) = (top.get(..n), good.get(..n), out.get_mut(..n))
+        if let (Some(top), Some(good), Some(table), Some(pred)) =
+            (top.get(..n), good.get(..n), u.get(..n), out.get_mut(..n))
         {
             if self.est.update_block(table, top, pred).is_ok() {
                 for (f, &p) in frames.iter_mut().zip(pred.iter()) {
