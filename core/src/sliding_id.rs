@@ -218,8 +218,11 @@ impl<T: Real> SlidingIdentifier<T> {
     }
 
     /// The estimate (`None` before [`MIN_ROWS`] rows, for singular normal equations, or for a
-    /// fit that is not an underdamped oscillator with a positive friction acceleration).
-    pub fn estimate(&self) -> Option<SlidingEstimate> {
+    /// fit that is not an underdamped oscillator with a positive friction acceleration). Until
+    /// the base has slid both ways the friction and the offset are one constant: with
+    /// `offset_known` the offset is then taken as 0 (the accelerometers were zeroed on a rest),
+    /// without it there is no estimate.
+    pub fn estimate(&self, offset_known: bool) -> Option<SlidingEstimate> {
         let mut v = self.sums;
         for (s, p) in v.iter_mut().zip(self.page.iter()) {
             *s += p.to_f64();
@@ -240,6 +243,7 @@ impl<T: Real> SlidingIdentifier<T> {
         // direction: the last two regressors are equal up to sign) the offset is taken as 0.
         let (theta, inv, fit) = match solve(&s, &c) {
             Some(r) => r,
+            None if !offset_known => return None,
             None => {
                 let s3 = [
                     [s[0][0], s[0][1], s[0][2]],

@@ -66,7 +66,7 @@ fn run<T: Real>(t: &Truth, rate: f64, noise: f64, episodes: usize) -> SlidingEst
     for (y, s) in signal(t, rate, episodes, noise, 7) {
         id.push(T::from_f64(y), s);
     }
-    id.estimate().unwrap()
+    id.estimate(false).unwrap()
 }
 
 fn rel(a: f64, b: f64) -> f64 {
@@ -107,7 +107,7 @@ fn noisy_f32_within_its_standard_deviations() {
 #[test]
 fn nothing_before_enough_rows_and_no_panic_on_bad_input() {
     let mut id = SlidingIdentifier::<f32>::new(10_000.0, 186.0, 0.9999).unwrap();
-    assert!(id.estimate().is_none());
+    assert!(id.estimate(true).is_none());
     for k in 0..10_000 {
         let y = if k % 7 == 0 { f32::NAN } else { 1.0 };
         id.push(y, if k % 2 == 0 { 1 } else { -1 });
@@ -116,7 +116,7 @@ fn nothing_before_enough_rows_and_no_panic_on_bad_input() {
     for _ in 0..10_000 {
         id.push(1.0, 1);
     }
-    assert!(id.estimate().is_none());
+    assert!(id.estimate(true).is_none());
     assert!(SlidingIdentifier::<f32>::new(0.0, 186.0, 1.0).is_err());
     assert!(SlidingIdentifier::<f32>::new(1e4, 186.0, 1.5).is_err());
 }
@@ -138,5 +138,5 @@ fn an_overdamped_sliding_oscillator_gives_no_estimate() {
         }
         id.push(0.0, 0);
     }
-    assert!(id.estimate().is_none());
+    assert!(id.estimate(true).is_none());
 }

@@ -84,11 +84,14 @@ pub struct BaseTuning {
     offset: f32,
     countdown: u32,
     last: Option<SlidingEstimate>,
+    zeroed: bool,
 }
 
 impl BaseTuning {
-    /// The tuning of the prior `params` at `rate` (`None` if the identifier cannot be set up).
-    pub fn new(params: StructureParams, rate: f64) -> Option<Self> {
+    /// The tuning of the prior `params` at `rate` (`None` if the identifier cannot be set up);
+    /// `zeroed`: the accelerometers are zeroed on a rest before the input (an estimate from one
+    /// direction of sliding may then take the offset as 0).
+    pub fn new(params: StructureParams, rate: f64, zeroed: bool) -> Option<Self> {
         let m = 1.0 + params.m1_kg / params.m2_kg;
         let root_m = libm::sqrt(m);
         let omega = 2.0 * core::f64::consts::PI * params.natural_frequency_hz * root_m;
@@ -115,6 +118,7 @@ impl BaseTuning {
             offset: 0.0,
             countdown: FIRST_CHECK_EVERY,
             last: None,
+            zeroed,
         })
     }
 
@@ -206,7 +210,7 @@ impl BaseTuning {
 
     #[inline(never)]
     fn adopt(&mut self) -> (Option<StickSlipCoefficients<f32>>, Option<f32>) {
-        let Some(e) = self.id.estimate() else {
+        let Some(e) = self.id.estimate(self.zeroed) else {
             return (None, None);
         };
         self.last = Some(e);
@@ -323,7 +327,11 @@ impl BaseSlot for Option<BaseTuning> {
     fn of_plan(plan: &crate::plan::Plan) -> Self {
         match plan.mode {
             super::Mode::Predict => {
-                BaseTuning::new(plan.specimen.structure, plan.specimen.sample_rate_hz)
+                BaseTuning::new(
+                    plan.specimen.structure,
+                    plan.specimen.sample_rate_hz,
+                    plan.rest_samples > 0,
+                )
             }
             super::Mode::Fuse => None,
         }
