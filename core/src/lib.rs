@@ -40,6 +40,7 @@ pub mod detect;
 pub mod error;
 pub mod friction;
 pub mod friction_id;
+pub mod least_squares;
 pub mod math;
 pub mod oscillator_id;
 pub mod recursion;

@@ -24,16 +24,14 @@
 //! duration), μ·g = γ/α and b = δ/α. The second difference form keeps the regressors apart in
 //! f32 (α ~ (ωh)², β ~ 2ζωh).
 //!
-//! **Estimation.** Least squares on every row whose three blocks lie in one sliding episode:
-//! the rows' products are summed in f32 over pages of [`PAGE`] rows and the pages in f64, with a
-//! forgetting factor per page. The estimate solves the 4×4 normal equations in f64; the
-//! standard deviations are the formal ones, σ²·S⁻¹, carried to ω, ζ and μ·g to first order.
+//! **Estimation.** Least squares on every row whose three blocks lie in one sliding episode
+//! ([`PagedNormal`]: products summed in f32 over pages, the pages in f64, with forgetting). The
+//! estimate solves the 4×4 normal equations in f64; the standard deviations are the formal
+//! ones, σ²·S⁻¹, carried to ω, ζ, μ·g and the offset to first order.
 
 use crate::error::{check, Error, Param};
+use crate::least_squares::PagedNormal;
 use crate::math::Real;
-
-/// Rows summed in f32 before they are added to the f64 sums.
-pub const PAGE: u32 = 32;
 /// The block duration the identifier aims at, in radians of the prior's sliding oscillator
 /// (ω·h). The error of μ·g = γ/α falls as h^(−3/2) (α grows as h², the noise of a block average
 /// falls as h^(−1/2), the rows as 1/h): 0.25 rad leaves ~25 blocks per period, and episodes of
@@ -43,9 +41,6 @@ pub const OMEGA_H: f64 = 0.25;
 pub const MAX_DECIMATION: u32 = 64;
 /// Rows needed before an estimate.
 pub const MIN_ROWS: f64 = 8.0;
-/// Products kept per row: the 10 of the symmetric 4×4 normal matrix, the 4 of the right-hand
-/// side, and the target's square.
-const K: usize = 15;
 
 /// The identified sliding oscillator.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -84,15 +79,8 @@ pub struct SlidingIdentifier<T> {
     /// The episode's last two block averages (newest first) and how many of them are valid.
     prev: [T; 2],
     prev_n: u8,
-    /// The page of rows (f32 on the firmware) and its row count.
-    page: [T; K],
-    page_rows: u32,
-    /// The pages' sums (f64), with forgetting per page.
-    sums: [f64; K],
-    rows: f64,
-    /// Rows ever added (wrapping).
-    added: u32,
-    rho_page: f64,
+    /// The normal equations of (Y_(k−1), Y_(k−1) − Y_(k−2), s, 1).
+    normal: PagedNormal<T, 4, 15>,
     /// Block duration (s).
     h: f64,
 }
@@ -129,12 +117,7 @@ impl<T: Real> SlidingIdentifier<T> {
             level: 0,
             prev: [T::ZERO; 2],
             prev_n: 0,
-            page: [T::ZERO; K],
-            page_rows: 0,
-            sums: [0.0; K],
-            rows: 0.0,
-            added: 0,
-            rho_page: (0..PAGE).fold(1.0, |a, _| a * forgetting),
+            normal: PagedNormal::new(forgetting),
             h: d / sample_rate_hz,
         })
     }
@@ -146,7 +129,7 @@ impl<T: Real> SlidingIdentifier<T> {
 
     /// Rows ever added (wrapping): an estimate changes only when it does.
     pub fn rows_added(&self) -> u32 {
-        self.added
+        self.normal.added()
     }
 
     /// One sample of the base acceleration `y` with its phase `level`: ±1 for a sample inside
@@ -183,38 +166,10 @@ impl<T: Real> SlidingIdentifier<T> {
             let [y1, y2] = self.prev;
             let s = if self.level > 0 { T::ONE } else { -T::ONE };
             let t = y - (y1 + y1) + y2;
-            let phi = [y1, y1 - y2, s, T::ONE];
-            let mut k = 0;
-            for i in 0..4 {
-                for j in i..4 {
-                    self.page[k] += phi[i] * phi[j];
-                    k += 1;
-                }
-            }
-            for p in phi {
-                self.page[k] += p * t;
-                k += 1;
-            }
-            self.page[k] += t * t;
-            self.page_rows += 1;
-            self.added = self.added.wrapping_add(1);
-            if self.page_rows >= PAGE {
-                self.fold();
-            }
+            self.normal.add(&[y1, y1 - y2, s, T::ONE], t);
         }
         self.prev = [y, self.prev[0]];
         self.prev_n = (self.prev_n + 1).min(2);
-    }
-
-    /// Adds the page to the f64 sums (forgetting the older ones).
-    #[inline(never)]
-    fn fold(&mut self) {
-        for (s, p) in self.sums.iter_mut().zip(self.page.iter_mut()) {
-            *s = *s * self.rho_page + p.to_f64();
-            *p = T::ZERO;
-        }
-        self.rows = self.rows * self.rho_page + self.page_rows as f64;
-        self.page_rows = 0;
     }
 
     /// The estimate (`None` before [`MIN_ROWS`] rows, for singular normal equations, or for a
@@ -223,42 +178,28 @@ impl<T: Real> SlidingIdentifier<T> {
     /// `offset_known` the offset is then taken as 0 (the accelerometers were zeroed on a rest),
     /// without it there is no estimate.
     pub fn estimate(&self, offset_known: bool) -> Option<SlidingEstimate> {
-        let mut v = self.sums;
-        for (s, p) in v.iter_mut().zip(self.page.iter()) {
-            *s += p.to_f64();
-        }
-        let rows = self.rows + self.page_rows as f64;
-        if rows < MIN_ROWS {
+        if self.normal.rows() < MIN_ROWS {
             return None;
         }
-        // S (upper triangle, row-major), c, tt.
-        let s = [
-            [v[0], v[1], v[2], v[3]],
-            [v[1], v[4], v[5], v[6]],
-            [v[2], v[5], v[7], v[8]],
-            [v[3], v[6], v[8], v[9]],
-        ];
-        let c = [v[10], v[11], v[12], v[13]];
         // Both directions of sliding separate the friction from the offset; until then (one
         // direction: the last two regressors are equal up to sign) the offset is taken as 0.
-        let (theta, inv, fit) = match solve(&s, &c) {
-            Some(r) => r,
+        let fit = match self.normal.solve::<4>() {
+            Some(f) => f,
             None if !offset_known => return None,
             None => {
-                let s3 = [
-                    [s[0][0], s[0][1], s[0][2]],
-                    [s[1][0], s[1][1], s[1][2]],
-                    [s[2][0], s[2][1], s[2][2]],
-                ];
-                let (t, i3, fit) = solve(&s3, &[c[0], c[1], c[2]])?;
-                let mut inv = [[0.0; 4]; 4];
-                for (row, r3) in inv.iter_mut().zip(i3) {
+                let f = self.normal.solve::<3>()?;
+                let mut cov = [[0.0; 4]; 4];
+                for (row, r3) in cov.iter_mut().zip(f.cov) {
                     row[..3].copy_from_slice(&r3);
                 }
-                ([t[0], t[1], t[2], 0.0], inv, fit)
+                crate::least_squares::Fit {
+                    theta: [f.theta[0], f.theta[1], f.theta[2], 0.0],
+                    cov,
+                    rows: f.rows,
+                }
             }
         };
-        let sigma2 = libm::fmax(v[14] - fit, 0.0) / libm::fmax(rows - 4.0, 1.0);
+        let (theta, rows) = (fit.theta, fit.rows);
         let (alpha, beta, gamma, delta) = (-theta[0], -theta[1], theta[2], theta[3]);
         let r2 = 1.0 - beta; // e^(−2ζωh)
         if !(alpha > 0.0 && r2 > 0.0 && r2 < 1.0) {
@@ -279,7 +220,7 @@ impl<T: Real> SlidingIdentifier<T> {
             return None;
         }
         // First-order errors (small ωh: α ≈ (ωh)², β ≈ 2ζωh).
-        let var = |i: usize, j: usize| sigma2 * inv[i][j];
+        let var = |i: usize, j: usize| fit.cov[i][j];
         let (va, vb, vg, vag) = (var(0, 0), var(1, 1), var(2, 2), -var(0, 2));
         let (vd, vad) = (var(3, 3), -var(0, 3));
         let off = delta / alpha;
@@ -301,60 +242,6 @@ impl<T: Real> SlidingIdentifier<T> {
             rows,
         })
     }
-}
-
-/// The solution θ of S·θ = c, S⁻¹ and θ·c (`None` if S is not positive definite).
-#[allow(clippy::type_complexity)]
-fn solve<const N: usize>(
-    s: &[[f64; N]; N],
-    c: &[f64; N],
-) -> Option<([f64; N], [[f64; N]; N], f64)> {
-    let inv = invert_spd(s)?;
-    let theta: [f64; N] = core::array::from_fn(|i| (0..N).map(|j| inv[i][j] * c[j]).sum());
-    let fit = (0..N).map(|i| theta[i] * c[i]).sum();
-    Some((theta, inv, fit))
-}
-
-/// The inverse of a symmetric positive definite matrix by Cholesky (`None` if it is not
-/// positive definite to working precision).
-#[allow(clippy::needless_range_loop)]
-fn invert_spd<const N: usize>(a: &[[f64; N]; N]) -> Option<[[f64; N]; N]> {
-    let mut l = [[0.0f64; N]; N];
-    for i in 0..N {
-        for j in 0..=i {
-            let mut sum = a[i][j];
-            for k in 0..j {
-                sum -= l[i][k] * l[j][k];
-            }
-            if i == j {
-                if sum <= 1e-9 * a[i][i].abs() || !sum.is_finite() {
-                    return None;
-                }
-                l[i][i] = libm::sqrt(sum);
-            } else {
-                l[i][j] = sum / l[j][j];
-            }
-        }
-    }
-    // L⁻¹ (lower), then S⁻¹ = L⁻ᵀ·L⁻¹.
-    let mut li = [[0.0f64; N]; N];
-    for i in 0..N {
-        li[i][i] = 1.0 / l[i][i];
-        for j in 0..i {
-            let mut sum = 0.0;
-            for k in j..i {
-                sum -= l[i][k] * li[k][j];
-            }
-            li[i][j] = sum / l[i][i];
-        }
-    }
-    let mut inv = [[0.0f64; N]; N];
-    for i in 0..N {
-        for j in 0..N {
-            inv[i][j] = (i.max(j)..N).map(|k| li[k][i] * li[k][j]).sum();
-        }
-    }
-    Some(inv)
 }
 
 #[cfg(test)]

@@ -1,0 +1,211 @@
+//! Linear least squares on a stream of rows, for the firmware's f32 ([`PagedNormal`]): the
+//! normal equations' products summed in `T` over pages of [`PAGE`] rows and the pages in f64
+//! (with a forgetting factor per page), so that long runs lose no precision in f32; solved in
+//! f64 by Cholesky, with the formal covariance σ²·S⁻¹.
+
+use crate::math::Real;
+
+/// Rows summed in `T` before they are added to the f64 sums.
+pub const PAGE: u32 = 32;
+
+/// A least-squares fit.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Fit<const N: usize> {
+    /// The parameters.
+    pub theta: [f64; N],
+    /// Their formal covariance σ²·S⁻¹.
+    pub cov: [[f64; N]; N],
+    /// Rows (with forgetting).
+    pub rows: f64,
+}
+
+/// The normal equations of `N` regressors; `K` = N(N+1)/2 + N + 1 products per row (the upper
+/// triangle of S, the right-hand side c, the target's square).
+#[derive(Debug, Clone)]
+pub struct PagedNormal<T, const N: usize, const K: usize> {
+    page: [T; K],
+    page_rows: u32,
+    sums: [f64; K],
+    rows: f64,
+    added: u32,
+    rho_page: f64,
+}
+
+/// Index of S[i][j] (i ≤ j) in the packed upper triangle.
+const fn tri<const N: usize>(i: usize, j: usize) -> usize {
+    i * N - i * (i + 1) / 2 + j
+}
+
+impl<T: Real, const N: usize, const K: usize> PagedNormal<T, N, K> {
+    const SIZES: () = assert!(K == N * (N + 1) / 2 + N + 1);
+
+    /// Empty normal equations, forgetting `forgetting` per row in (0, 1] (not checked here: the
+    /// identifiers that own them check it).
+    pub fn new(forgetting: f64) -> Self {
+        let () = Self::SIZES;
+        Self {
+            page: [T::ZERO; K],
+            page_rows: 0,
+            sums: [0.0; K],
+            rows: 0.0,
+            added: 0,
+            rho_page: (0..PAGE).fold(1.0, |a, _| a * forgetting),
+        }
+    }
+
+    /// One row: regressors `phi`, target `t`.
+    #[inline(always)]
+    pub fn add(&mut self, phi: &[T; N], t: T) {
+        let mut k = 0;
+        for i in 0..N {
+            for j in i..N {
+                if let Some(p) = self.page.get_mut(k) {
+                    *p += phi[i] * phi[j];
+                }
+                k += 1;
+            }
+        }
+        for &f in phi {
+            if let Some(p) = self.page.get_mut(k) {
+                *p += f * t;
+            }
+            k += 1;
+        }
+        if let Some(p) = self.page.get_mut(k) {
+            *p += t * t;
+        }
+        self.page_rows += 1;
+        self.added = self.added.wrapping_add(1);
+        if self.page_rows >= PAGE {
+            self.fold();
+        }
+    }
+
+    /// Adds the page to the f64 sums (forgetting the older ones).
+    #[inline(never)]
+    fn fold(&mut self) {
+        for (s, p) in self.sums.iter_mut().zip(self.page.iter_mut()) {
+            *s = *s * self.rho_page + p.to_f64();
+            *p = T::ZERO;
+        }
+        self.rows = self.rows * self.rho_page + self.page_rows as f64;
+        self.page_rows = 0;
+    }
+
+    /// Rows ever added (wrapping): a fit changes only when it does.
+    pub fn added(&self) -> u32 {
+        self.added
+    }
+
+    /// Rows, with forgetting.
+    pub fn rows(&self) -> f64 {
+        self.rows + self.page_rows as f64
+    }
+
+    /// The fit of the first `M` regressors (the others taken as 0; `M` = `N`: all of them),
+    /// `None` if their normal equations are not positive definite or there are no more rows
+    /// than parameters.
+    pub fn solve<const M: usize>(&self) -> Option<Fit<M>> {
+        let mut v = self.sums;
+        for (s, p) in v.iter_mut().zip(self.page.iter()) {
+            *s += p.to_f64();
+        }
+        let rows = self.rows();
+        if M > N || rows <= M as f64 {
+            return None;
+        }
+        let s: [[f64; M]; M] =
+            core::array::from_fn(|i| core::array::from_fn(|j| v[tri::<N>(i.min(j), i.max(j))]));
+        let c0 = N * (N + 1) / 2;
+        let c: [f64; M] = core::array::from_fn(|i| v[c0 + i]);
+        let inv = invert_spd(&s)?;
+        let theta: [f64; M] = core::array::from_fn(|i| (0..M).map(|j| inv[i][j] * c[j]).sum());
+        let fit: f64 = (0..M).map(|i| theta[i] * c[i]).sum();
+        let sigma2 = libm::fmax(v[K - 1] - fit, 0.0) / (rows - M as f64);
+        let cov = core::array::from_fn(|i| core::array::from_fn(|j| sigma2 * inv[i][j]));
+        Some(Fit { theta, cov, rows })
+    }
+}
+
+/// The inverse of a symmetric positive definite matrix by Cholesky (`None` if it is not
+/// positive definite to working precision).
+#[allow(clippy::needless_range_loop)]
+fn invert_spd<const N: usize>(a: &[[f64; N]; N]) -> Option<[[f64; N]; N]> {
+    let mut l = [[0.0f64; N]; N];
+    for i in 0..N {
+        for j in 0..=i {
+            let mut sum = a[i][j];
+            for k in 0..j {
+                sum -= l[i][k] * l[j][k];
+            }
+            if i == j {
+                if sum <= 1e-9 * a[i][i].abs() || !sum.is_finite() {
+                    return None;
+                }
+                l[i][i] = libm::sqrt(sum);
+            } else {
+                l[i][j] = sum / l[j][j];
+            }
+        }
+    }
+    // L⁻¹ (lower), then S⁻¹ = L⁻ᵀ·L⁻¹.
+    let mut li = [[0.0f64; N]; N];
+    for i in 0..N {
+        li[i][i] = 1.0 / l[i][i];
+        for j in 0..i {
+            let mut sum = 0.0;
+            for k in j..i {
+                sum -= l[i][k] * li[k][j];
+            }
+            li[i][j] = sum / l[i][i];
+        }
+    }
+    let mut inv = [[0.0f64; N]; N];
+    for i in 0..N {
+        for j in 0..N {
+            inv[i][j] = (i.max(j)..N).map(|k| li[k][i] * li[k][j]).sum();
+        }
+    }
+    Some(inv)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A known linear model with a deterministic perturbation: the fit against the generating
+    /// parameters, the packed indices against a direct count, and a leading sub-fit.
+    #[test]
+    fn fits_a_known_linear_model() {
+        assert_eq!(
+            [
+                tri::<4>(0, 0),
+                tri::<4>(0, 3),
+                tri::<4>(1, 1),
+                tri::<4>(2, 3),
+                tri::<4>(3, 3)
+            ],
+            [0, 3, 4, 8, 9]
+        );
+        assert_eq!([tri::<3>(1, 2), tri::<3>(2, 2)], [4, 5]);
+        let mut n = PagedNormal::<f32, 3, 10>::new(1.0);
+        let mut m = PagedNormal::<f32, 3, 10>::new(1.0);
+        for k in 0..5000 {
+            let x = (k as f32 * 0.37).sin();
+            let s = if (k / 50) % 2 == 0 { 1.0 } else { -1.0 };
+            let e = 1e-3 * (k as f32 * 1.7).cos();
+            n.add(&[x, s, 1.0], 0.5 * x + 2.0 * s - 0.3 + e);
+            // Only the first two regressors matter: the leading fit.
+            m.add(&[x, s, 0.0], 0.5 * x + 2.0 * s + e);
+        }
+        let f = n.solve::<3>().unwrap();
+        assert!((f.theta[0] - 0.5).abs() < 1e-4, "{f:?}");
+        assert!((f.theta[1] - 2.0).abs() < 1e-4, "{f:?}");
+        assert!((f.theta[2] + 0.3).abs() < 1e-4, "{f:?}");
+        assert!(f.cov[0][0] > 0.0 && f.cov[0][0] < 1e-8);
+        assert!(m.solve::<3>().is_none(), "a zero regressor: singular");
+        let g = m.solve::<2>().unwrap();
+        assert!((g.theta[0] - 0.5).abs() < 1e-4 && (g.theta[1] - 2.0).abs() < 1e-4);
+        assert_eq!(n.added(), 5000);
+    }
+}
