@@ -121,10 +121,6 @@ fn plan_consts(path: &Path, plan: &Plan) -> String {
         ModelKind::Rectangular => "ssvr_proto::RectangularModel",
         // A velocity-dependent law: the model that follows it (only then is its code compiled in).
         ModelKind::StickSlip if plan.follows_law() => "ssvr_proto::StickSlipLawModel<STORAGE>",
-        // Fuse mode: no tuning from the base accelerometer (predict mode's) compiled in.
-        ModelKind::StickSlip if plan.mode == ssvr_proto::model::Mode::Fuse => {
-            "ssvr_proto::StickSlipFuseModel<STORAGE>"
-        }
         ModelKind::StickSlip => "ssvr_proto::StickSlipModel<STORAGE>",
         ModelKind::FixedBase => "ssvr_proto::FixedBaseModel<STORAGE>",
     };

@@ -31,13 +31,8 @@ pub struct PagedNormal<T, const N: usize, const K: usize> {
     rho_page: f64,
 }
 
-/// Index of S[i][j] (i ≤ j) in the packed upper triangle.
-const fn tri<const N: usize>(i: usize, j: usize) -> usize {
-    i * N - i * (i + 1) / 2 + j
-}
-
 impl<T: Real, const N: usize, const K: usize> PagedNormal<T, N, K> {
-    const SIZES: () = assert!(K == N * (N + 1) / 2 + N + 1);
+    const SIZES: () = assert!(K == N * (N + 1) / 2 + N + 1 && N <= MAX_N);
 
     /// Empty normal equations, forgetting `forgetting` per row in (0, 1] (not checked here: the
     /// identifiers that own them check it).
@@ -106,33 +101,69 @@ impl<T: Real, const N: usize, const K: usize> PagedNormal<T, N, K> {
     /// `None` if their normal equations are not positive definite or there are no more rows
     /// than parameters.
     pub fn solve<const M: usize>(&self) -> Option<Fit<M>> {
-        let mut v = self.sums;
-        for (s, p) in v.iter_mut().zip(self.page.iter()) {
-            *s += p.to_f64();
+        let mut v = [0.0f64; MAX_K];
+        for ((d, &s), p) in v.iter_mut().zip(&self.sums).zip(&self.page) {
+            *d = s + p.to_f64();
         }
-        let rows = self.rows();
-        if M > N || rows <= M as f64 {
-            return None;
-        }
-        let s: [[f64; M]; M] =
-            core::array::from_fn(|i| core::array::from_fn(|j| v[tri::<N>(i.min(j), i.max(j))]));
-        let c0 = N * (N + 1) / 2;
-        let c: [f64; M] = core::array::from_fn(|i| v[c0 + i]);
-        let inv = invert_spd(&s)?;
-        let theta: [f64; M] = core::array::from_fn(|i| (0..M).map(|j| inv[i][j] * c[j]).sum());
-        let fit: f64 = (0..M).map(|i| theta[i] * c[i]).sum();
-        let sigma2 = libm::fmax(v[K - 1] - fit, 0.0) / (rows - M as f64);
-        let cov = core::array::from_fn(|i| core::array::from_fn(|j| sigma2 * inv[i][j]));
-        Some(Fit { theta, cov, rows })
+        let (theta, cov) = solve_packed(&v, N, M, self.rows())?;
+        Some(Fit {
+            theta: core::array::from_fn(|i| theta[i]),
+            cov: core::array::from_fn(|i| core::array::from_fn(|j| cov[i][j])),
+            rows: self.rows(),
+        })
     }
+}
+
+/// Largest number of regressors.
+pub const MAX_N: usize = 4;
+const MAX_K: usize = MAX_N * (MAX_N + 1) / 2 + MAX_N + 1;
+
+/// The fit of the first `m` of `n` regressors from packed sums `v` (one code for every size: the
+/// firmware's flash holds it once).
+#[inline(never)]
+#[allow(clippy::needless_range_loop, clippy::type_complexity)]
+fn solve_packed(
+    v: &[f64; MAX_K],
+    n: usize,
+    m: usize,
+    rows: f64,
+) -> Option<([f64; MAX_N], [[f64; MAX_N]; MAX_N])> {
+    if m == 0 || m > n || n > MAX_N || rows <= m as f64 {
+        return None;
+    }
+    let tri = |i: usize, j: usize| {
+        let (i, j) = (i.min(j), i.max(j));
+        i * n - i * (i + 1) / 2 + j
+    };
+    let c0 = n * (n + 1) / 2;
+    let mut s = [[0.0f64; MAX_N]; MAX_N];
+    for i in 0..m {
+        for j in 0..m {
+            s[i][j] = v[tri(i, j)];
+        }
+    }
+    let inv = invert_spd(&s, m)?;
+    let mut theta = [0.0f64; MAX_N];
+    for i in 0..m {
+        theta[i] = (0..m).map(|j| inv[i][j] * v[c0 + j]).sum();
+    }
+    let fit: f64 = (0..m).map(|i| theta[i] * v[c0 + i]).sum();
+    let sigma2 = libm::fmax(v[c0 + n] - fit, 0.0) / (rows - m as f64);
+    let mut cov = [[0.0f64; MAX_N]; MAX_N];
+    for i in 0..m {
+        for j in 0..m {
+            cov[i][j] = sigma2 * inv[i][j];
+        }
+    }
+    Some((theta, cov))
 }
 
 /// The inverse of a symmetric positive definite matrix by Cholesky (`None` if it is not
 /// positive definite to working precision).
 #[allow(clippy::needless_range_loop)]
-fn invert_spd<const N: usize>(a: &[[f64; N]; N]) -> Option<[[f64; N]; N]> {
-    let mut l = [[0.0f64; N]; N];
-    for i in 0..N {
+fn invert_spd(a: &[[f64; MAX_N]; MAX_N], n: usize) -> Option<[[f64; MAX_N]; MAX_N]> {
+    let mut l = [[0.0f64; MAX_N]; MAX_N];
+    for i in 0..n {
         for j in 0..=i {
             let mut sum = a[i][j];
             for k in 0..j {
@@ -149,8 +180,8 @@ fn invert_spd<const N: usize>(a: &[[f64; N]; N]) -> Option<[[f64; N]; N]> {
         }
     }
     // L⁻¹ (lower), then S⁻¹ = L⁻ᵀ·L⁻¹.
-    let mut li = [[0.0f64; N]; N];
-    for i in 0..N {
+    let mut li = [[0.0f64; MAX_N]; MAX_N];
+    for i in 0..n {
         li[i][i] = 1.0 / l[i][i];
         for j in 0..i {
             let mut sum = 0.0;
@@ -160,10 +191,10 @@ fn invert_spd<const N: usize>(a: &[[f64; N]; N]) -> Option<[[f64; N]; N]> {
             li[i][j] = sum / l[i][i];
         }
     }
-    let mut inv = [[0.0f64; N]; N];
-    for i in 0..N {
-        for j in 0..N {
-            inv[i][j] = (i.max(j)..N).map(|k| li[k][i] * li[k][j]).sum();
+    let mut inv = [[0.0f64; MAX_N]; MAX_N];
+    for i in 0..n {
+        for j in 0..n {
+            inv[i][j] = (i.max(j)..n).map(|k| li[k][i] * li[k][j]).sum();
         }
     }
     Some(inv)
@@ -174,20 +205,9 @@ mod tests {
     use super::*;
 
     /// A known linear model with a deterministic perturbation: the fit against the generating
-    /// parameters, the packed indices against a direct count, and a leading sub-fit.
+    /// parameters, and a leading sub-fit.
     #[test]
     fn fits_a_known_linear_model() {
-        assert_eq!(
-            [
-                tri::<4>(0, 0),
-                tri::<4>(0, 3),
-                tri::<4>(1, 1),
-                tri::<4>(2, 3),
-                tri::<4>(3, 3)
-            ],
-            [0, 3, 4, 8, 9]
-        );
-        assert_eq!([tri::<3>(1, 2), tri::<3>(2, 2)], [4, 5]);
         let mut n = PagedNormal::<f32, 3, 10>::new(1.0);
         let mut m = PagedNormal::<f32, 3, 10>::new(1.0);
         for k in 0..5000 {

@@ -44,7 +44,7 @@ pub use event::{Event, EventKind};
 pub use frame::{Frame, Sample};
 pub use model::{
     FixedBaseModel, FromPlan, Mode, Model, ModelKind, Pushed, RectangularModel, StaticFriction,
-    StickSlipFuseModel, StickSlipLawModel, StickSlipModel,
+    StickSlipLawModel, StickSlipModel,
 };
 pub use pipeline::{EventSource, Pipeline, Stats, Step, BATCH};
 pub use plan::{DetectorPlan, Plan, PlanError, Specimen};

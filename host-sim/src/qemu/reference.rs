@@ -235,9 +235,13 @@ impl Reference {
                     } else {
                         f32::NAN
                     };
-                    let top = b.top_of(base, est.phase().level());
-                    let y = est.update(f64::from(table - b.offset()), f64::from(top));
-                    b.push_run(&[base]);
+                    let y_in = if *predict {
+                        b.top_of(base, est.phase().level())
+                    } else {
+                        top as f32 - b.top_offset()
+                    };
+                    let y = est.update(f64::from(table - b.offset()), f64::from(y_in));
+                    b.push_run(&[base], &[top as f32]);
                     let (c, mu) = b.check(1);
                     if c.is_some() {
                         let (f, xi, _) = b.in_use();

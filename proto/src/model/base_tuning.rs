@@ -15,11 +15,20 @@
 //! samples before it goes to the identifier, so that every event reported meanwhile labels it
 //! with its true phase; samples within [`GUARD`] samples of an event are not used.
 //!
+//! In **fuse** mode the same identification gives only the table accelerometer's offset (f, ξ
+//! and μ come from the top accelerometer there), and the momentum balance gives the top
+//! accelerometer's offset: over the sliding samples the measured top acceleration is fitted as
+//! −r̂·ü2 + c·s + d (least squares, [`PagedNormal`]), d = r·b_table + b_top. Both offsets are
+//! removed from the model's inputs once known (3σ), so a common offset of the table and the top
+//! (indistinguishable from a constant table acceleration for the fixed-base dynamics) is
+//! separated by the sliding phases.
+//!
 //! Coulomb friction only (a velocity-dependent law changes μ along the slide: its model keeps
 //! the prior's law in predict mode). All in f32 but the adoption's f64 at a check: the firmware
 //! and the host run this same code.
 
 use super::tuning::{Adoption, OscillatorReport};
+use ssvr_core::least_squares::PagedNormal;
 use ssvr_core::oscillator_id::OscillatorEstimate;
 use ssvr_core::sliding_id::{SlidingEstimate, SlidingIdentifier};
 use ssvr_core::stick_slip::{MuEstimate, StickSlipCoefficients};
@@ -44,6 +53,10 @@ pub const CHECK_EVERY: u32 = 1024;
 pub const FAST_CHECKS: u8 = 16;
 const _: () = assert!(FIRST_CHECK_EVERY.is_multiple_of(crate::pipeline::BATCH as u32));
 const _: () = assert!(CHECK_EVERY.is_multiple_of(FIRST_CHECK_EVERY));
+/// One sliding sample in this many is a row of the fuse mode's top fit (its cost per sample,
+/// f32 products and their f64 pages, divided by it; thousands of rows per second of sliding
+/// remain at 10 kHz).
+pub const TOP_FIT_EVERY: u8 = 8;
 /// Largest relative standard deviation of μ̂ for adoption (a μ known to 2 % is far better than
 /// a prior 10–25 % off, and later checks refine it).
 pub const MAX_REL_STD_MU: f64 = 2e-2;
@@ -54,8 +67,10 @@ pub const MIN_REL_CHANGE_MU: f64 = 1e-4;
 #[derive(Debug, Clone)]
 pub struct BaseTuning {
     id: SlidingIdentifier<f32>,
-    /// The delay line: base samples and their phase labels; `at` the slot of the next sample.
+    /// The delay line: base (and, fuse mode, top) samples and their phase labels; `at` the slot
+    /// of the next sample.
     ring: [f32; DELAY],
+    top_ring: [f32; DELAY],
     labels: [i8; DELAY],
     at: usize,
     filled: usize,
@@ -85,13 +100,22 @@ pub struct BaseTuning {
     countdown: u32,
     last: Option<SlidingEstimate>,
     zeroed: bool,
+    /// Fuse mode: only the offsets (the top accelerometer's from `top_fit`).
+    fuse: bool,
+    /// The measured top acceleration against (base, s, 1) while sliding.
+    top_fit: PagedNormal<f32, 3, 10>,
+    /// The top accelerometer's offset in use (m/s²) and its standard deviation.
+    top_offset: f32,
+    top_offset_std_use: f64,
+    /// Sliding samples until the next row of the top fit.
+    top_skip: u8,
 }
 
 impl BaseTuning {
     /// The tuning of the prior `params` at `rate` (`None` if the identifier cannot be set up);
     /// `zeroed`: the accelerometers are zeroed on a rest before the input (an estimate from one
     /// direction of sliding may then take the offset as 0).
-    pub fn new(params: StructureParams, rate: f64, zeroed: bool) -> Option<Self> {
+    pub fn new(params: StructureParams, rate: f64, zeroed: bool, fuse: bool) -> Option<Self> {
         let m = 1.0 + params.m1_kg / params.m2_kg;
         let root_m = libm::sqrt(m);
         let omega = 2.0 * core::f64::consts::PI * params.natural_frequency_hz * root_m;
@@ -99,6 +123,7 @@ impl BaseTuning {
         Some(Self {
             id,
             ring: [0.0; DELAY],
+            top_ring: [0.0; DELAY],
             labels: [0; DELAY],
             at: 0,
             filled: 0,
@@ -119,6 +144,11 @@ impl BaseTuning {
             countdown: FIRST_CHECK_EVERY,
             last: None,
             zeroed,
+            fuse,
+            top_fit: PagedNormal::new(FORGETTING_PER_ROW),
+            top_offset: 0.0,
+            top_offset_std_use: 0.0,
+            top_skip: TOP_FIT_EVERY,
         })
     }
 
@@ -160,20 +190,39 @@ impl BaseTuning {
         self.offset
     }
 
-    /// A run of base samples (NaN: missing or saturated) in the phase of the last event.
+    /// The top accelerometer's offset in use (m/s², fuse mode; 0 in predict mode).
     #[inline(always)]
-    pub fn push_run(&mut self, base: &[f32]) {
-        for &b in base {
-            let (Some(y), Some(l)) = (self.ring.get_mut(self.at), self.labels.get_mut(self.at))
-            else {
+    pub fn top_offset(&self) -> f32 {
+        self.top_offset
+    }
+
+    /// A run of base and top samples (NaN: missing or saturated) in the phase of the last
+    /// event (the tops are read in fuse mode only).
+    #[inline(always)]
+    pub fn push_run(&mut self, base: &[f32], top: &[f32]) {
+        for (&b, &t) in base.iter().zip(top) {
+            let (Some(y), Some(l), Some(yt)) = (
+                self.ring.get_mut(self.at),
+                self.labels.get_mut(self.at),
+                self.top_ring.get_mut(self.at),
+            ) else {
                 return;
             };
             if self.filled == DELAY {
                 self.id.push(*y, *l);
+                if self.fuse && *l != 0 {
+                    self.top_skip = self.top_skip.wrapping_sub(1);
+                    if self.top_skip == 0 && (*y - *yt).is_finite() {
+                        self.top_skip = TOP_FIT_EVERY;
+                        let s = if *l > 0 { 1.0 } else { -1.0 };
+                        self.top_fit.add(&[*y, s, 1.0], *yt);
+                    }
+                }
             } else {
                 self.filled += 1;
             }
             *y = b;
+            *yt = t;
             *l = if self.skip > 0 {
                 self.skip -= 1;
                 0
@@ -191,30 +240,34 @@ impl BaseTuning {
             self.countdown -= samples;
             return (None, None);
         }
-        self.countdown = if self.fast_checks > 0 && self.mu_adoptions == 0 {
+        self.countdown = if self.fast_checks > 0 && self.mu_adoptions == 0 && !self.fuse {
             FIRST_CHECK_EVERY
         } else {
             CHECK_EVERY
         };
-        let rows = self.id.rows_added();
+        let rows = self.id.rows_added().wrapping_add(self.top_fit.added());
         if rows == self.rows_seen {
             return (None, None);
         }
         self.rows_seen = rows;
-        let adopted = self.adopt();
-        if self.last.is_some() {
-            self.fast_checks = self.fast_checks.saturating_sub(1);
-        }
-        adopted
+        self.fast_checks = self.fast_checks.saturating_sub(1);
+        self.adopt()
     }
 
     #[inline(never)]
     fn adopt(&mut self) -> (Option<StickSlipCoefficients<f32>>, Option<f32>) {
+        if self.fuse {
+            self.adopt_top_offset();
+        }
         let Some(e) = self.id.estimate(self.zeroed) else {
             return (None, None);
         };
         self.last = Some(e);
-        let coefficients = self.adoption.adopt(&self.oscillator(&e));
+        let coefficients = if self.fuse {
+            None
+        } else {
+            self.adoption.adopt(&self.oscillator(&e))
+        };
         let mu = e.friction_accel / self.g as f64;
         let sd = e.friction_accel_std / self.g as f64;
         let plausible = mu > 0.5 * self.prior_mu && mu < 2.0 * self.prior_mu;
@@ -233,8 +286,11 @@ impl BaseTuning {
             self.offset = e.offset as f32;
             self.offset_std_use = e.offset_std;
         }
-        let adopt =
-            plausible && sd < MAX_REL_STD_MU * mu && change > MIN_REL_CHANGE_MU * mu && better;
+        let adopt = !self.fuse
+            && plausible
+            && sd < MAX_REL_STD_MU * mu
+            && change > MIN_REL_CHANGE_MU * mu
+            && better;
         let mu = adopt.then(|| {
             self.mu_use = mu as f32;
             self.mu_std_use = sd;
@@ -242,6 +298,22 @@ impl BaseTuning {
             self.mu_use
         });
         (coefficients, mu)
+    }
+
+    /// Fuse mode: the top accelerometer's offset from the momentum balance's fit, adopted when
+    /// it differs significantly from the one in use or is known twice as well.
+    fn adopt_top_offset(&mut self) {
+        let Some(f) = self.top_fit.solve::<3>() else {
+            return;
+        };
+        // d = r·b_table + b_top, r = −θ0.
+        let b = f.theta[2] + f.theta[0] * self.offset as f64;
+        let sd = libm::sqrt(libm::fmax(f.cov[2][2], 0.0));
+        let change = libm::fabs(b - self.top_offset as f64);
+        if sd > 0.0 && (change > 3.0 * sd || sd < 0.5 * self.top_offset_std_use) {
+            self.top_offset = b as f32;
+            self.top_offset_std_use = sd;
+        }
     }
 
     /// The fixed-base oscillator of a sliding one, with the prior's M.
@@ -325,16 +397,12 @@ impl BaseSlot for Option<BaseTuning> {
         None
     }
     fn of_plan(plan: &crate::plan::Plan) -> Self {
-        match plan.mode {
-            super::Mode::Predict => {
-                BaseTuning::new(
-                    plan.specimen.structure,
-                    plan.specimen.sample_rate_hz,
-                    plan.rest_samples > 0,
-                )
-            }
-            super::Mode::Fuse => None,
-        }
+        BaseTuning::new(
+            plan.specimen.structure,
+            plan.specimen.sample_rate_hz,
+            plan.rest_samples > 0,
+            plan.mode == super::Mode::Fuse,
+        )
     }
     #[inline(always)]
     fn get(&self) -> Option<&BaseTuning> {

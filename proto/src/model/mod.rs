@@ -18,9 +18,7 @@ mod tuning;
 pub use base_tuning::{BaseSlot, BaseTuning};
 pub use friction::{FrictionReport, FrictionSlot, SlipFriction};
 pub use rectangular::RectangularModel;
-pub use stick_slip::{
-    FixedBaseModel, StickSlipF32, StickSlipFuseModel, StickSlipLawModel, StickSlipModel,
-};
+pub use stick_slip::{FixedBaseModel, StickSlipF32, StickSlipLawModel, StickSlipModel};
 pub use tuning::{OscillatorReport, Tuning, CHECK_EVERY};
 
 use crate::channel::CHANNELS;

@@ -70,10 +70,6 @@ fn inputs(channels: &[f32; CHANNELS], f: u8, fuse: bool) -> (f32, f32) {
 /// one): μ per sliding sample from the slip speed, the law identified online in fuse mode.
 pub type StickSlipLawModel<const H: usize> = StickSlipModel<H, true, Option<SlipFriction>, ()>;
 
-/// The Coulomb stick-slip model without predict mode's tuning from the base accelerometer (a
-/// fuse-mode plan's: its image holds no code of it).
-pub type StickSlipFuseModel<const H: usize> = StickSlipModel<H, true, (), ()>;
-
 /// The fixed-base model: the stick-slip estimator held stuck, no event pushed.
 pub type FixedBaseModel<const H: usize> = StickSlipModel<H, false, (), ()>;
 
@@ -316,35 +312,42 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot> Model
 impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
     StickSlipModel<H, EVENTS, F, B>
 {
-    /// [`Model::predict_run`] in predict mode with a [`BaseTuning`]: the sliding samples' top
-    /// acceleration from the base accelerometer (the momentum balance) for the sliding observer,
-    /// the base samples to the identification, and its adoptions.
+    /// [`Model::predict_run`] with a [`BaseTuning`]: the table input less its identified offset;
+    /// in predict mode the sliding samples' top acceleration from the base accelerometer (the
+    /// momentum balance) for the sliding observer and the adoptions of f, ξ and μ; in fuse mode
+    /// the measured top less its identified offset, and the top accelerometer's tuning.
     #[inline(always)]
     fn predict_run_base(&mut self, frames: &mut [Frame], from: usize) {
         let to = from + frames.len();
-        let (Some(bt), Some(table), Some(base)) = (
+        let (Some(bt), Some(table), Some(base), Some(measured)) = (
             self.base_tuning.get_mut(),
             self.table.get(from..to),
             self.base.get(from..to),
+            self.top.get(from..to),
         ) else {
             return;
         };
         let level = self.est.phase().level();
-        let off = bt.offset();
+        let (off, top_off, fuse) = (bt.offset(), bt.top_offset(), self.fuse);
         let (mut top, mut good, mut u) = ([0.0f32; BATCH], [0.0f32; BATCH], [0.0f32; BATCH]);
-        for ((((y, g), u), f), (&b, &t)) in top
+        for (((((y, g), u), f), (&b, &t)), &m) in top
             .iter_mut()
             .zip(good.iter_mut())
             .zip(u.iter_mut())
             .zip(frames.iter())
             .zip(base.iter().zip(table))
+            .zip(measured)
         {
             *g = if f.flags & (flags::SATURATED | flags::MISSING) == 0 {
                 b
             } else {
                 f32::NAN
             };
-            *y = bt.top_of(*g, level);
+            *y = if fuse {
+                m - top_off
+            } else {
+                bt.top_of(*g, level)
+            };
             *u = t - off;
         }
         let n = frames.len();
@@ -357,7 +360,7 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
                     f.prediction = p;
                 }
             }
-            bt.push_run(good);
+            bt.push_run(good, measured);
         }
         let (c, mu) = bt.check(n as u32);
         if let Some(c) = c {
@@ -365,6 +368,12 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
         }
         if let Some(mu) = mu {
             self.est.set_friction(mu);
+        }
+        if let Some(t) = &mut self.tuning {
+            t.push_run(measured, base);
+            if let Some(c) = t.check(n as u32) {
+                self.est.retune(c);
+            }
         }
     }
 }
