@@ -148,8 +148,26 @@ impl<T: Real> SlidingIdentifier<T> {
         self.sum += y;
         self.count += 1;
         if self.count >= self.decimation {
-            self.block();
+            let avg = self.sum * self.inv_n;
+            (self.count, self.sum) = (0, T::ZERO);
+            self.row(avg);
         }
+    }
+
+    /// One block's average `y` of [`Self::decimation`] consecutive samples (for a caller that
+    /// forms the blocks itself) with its phase `level` (0: a block not to use); as [`Self::push`]
+    /// on its samples, the episode ending at a level 0, a change of level or a non-finite
+    /// average.
+    #[inline(never)]
+    pub fn push_block(&mut self, y: T, level: i8) {
+        if level == 0 || level != self.level || !y.is_finite() {
+            self.end_episode();
+            if level == 0 || !y.is_finite() {
+                return;
+            }
+            self.level = level;
+        }
+        self.row(y);
     }
 
     /// Ends the episode: the next sample starts a new one.
@@ -158,10 +176,9 @@ impl<T: Real> SlidingIdentifier<T> {
         (self.count, self.sum, self.prev_n, self.level) = (0, T::ZERO, 0, 0);
     }
 
+    /// The row of a block average (the episode's third block on).
     #[inline(never)]
-    fn block(&mut self) {
-        let y = self.sum * self.inv_n;
-        (self.count, self.sum) = (0, T::ZERO);
+    fn row(&mut self, y: T) {
         if self.prev_n >= 2 {
             let [y1, y2] = self.prev;
             let s = if self.level > 0 { T::ONE } else { -T::ONE };

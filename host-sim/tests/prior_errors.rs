@@ -116,9 +116,10 @@ fn identifies_the_static_friction_at_the_slip_starts() {
 /// Predict mode (no top accelerometer), μ told 25 % high or low: μ is identified from the base
 /// accelerometer while sliding (the sliding oscillator's equilibria, `core::sliding_id`) and
 /// adopted at the first significant estimate; the sliding state follows the momentum balance.
-/// Measured on these 3 s of the default scene: μ̂ within 6.7e-4 of 0.2; RMS 2.42 % of the peak,
-/// all before the first adoption (0.16 s after the first slip), 0.049 % after the first second;
-/// the prior's open loop: 14.7 % over the whole run.
+/// Measured on these 3 s of the default scene: μ̂ within 7e-4 of 0.2; RMS 3.04 % of the peak,
+/// all before the first adoption (once the base has slid both ways: without a rest the friction
+/// and the table's offset are one constant until then), 0.049 % after the first second; the
+/// prior's open loop: 14.7 % over the whole run.
 #[test]
 fn predict_identifies_mu_from_the_base_accelerometer() {
     for mu in [1.25, 0.75] {
@@ -133,7 +134,7 @@ fn predict_identifies_mu_from_the_base_accelerometer() {
             e.rms_err_pct_of_peak, e.max_err_pct_of_peak
         );
         assert!((m / 0.2 - 1.0).abs() < 1e-3, "mu x{mu}: {m}");
-        assert!(e.rms_err_pct_of_peak < 2.7, "mu x{mu}");
+        assert!(e.rms_err_pct_of_peak < 3.3, "mu x{mu}");
         // After the first adoption the error is that of the exact prior's.
         let late = late_rms(&csv, 1.0);
         println!("  after 1 s: {late} % RMS");
@@ -144,7 +145,7 @@ fn predict_identifies_mu_from_the_base_accelerometer() {
 /// Predict mode, f told 8 % high or low, or ξ twice: f and ξ are identified from the sliding
 /// base (ω = p·√M, ζ = ξ·√M with the prior's M) and adopted (measured on these 5 s of the
 /// default scene: f̂ within 6e-5 of 7 Hz and ξ̂ within 6e-4 of 0.05, the adopted ones within
-/// 4.5e-4 and 3e-3; RMS 0.41–0.90 % of the peak, 0.030–0.038 % after 2 s).
+/// 4.5e-4 and 3e-3; RMS 0.41–0.90 % of the peak, 0.030–0.047 % after 2 s).
 #[test]
 fn predict_identifies_f_and_xi_from_the_base_accelerometer() {
     for (f, xi) in [(1.08, 1.0), (0.92, 1.0), (1.0, 2.0)] {
@@ -171,7 +172,7 @@ fn predict_identifies_f_and_xi_from_the_base_accelerometer() {
         assert!(used.adoptions > 0);
         let late = late_rms(&csv, 2.0);
         println!("  after 2 s: {late} % RMS");
-        assert!(late < 0.045, "f x{f} xi x{xi}");
+        assert!(late < 0.055, "f x{f} xi x{xi}");
     }
 }
 

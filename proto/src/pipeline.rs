@@ -104,6 +104,12 @@ impl<M: Model, D: EventDetector> Pipeline<M, D> {
         self
     }
 
+    /// The accelerometers' offsets the model identified and removes from its inputs beyond
+    /// [`Self::offsets`] ([`Model::offsets`]).
+    pub fn model_offsets(&self) -> [f32; 3] {
+        self.model.offsets()
+    }
+
     /// The accelerometers' offsets removed (m/s²): table, base, top; the base's includes the
     /// offset its detector tracks against the table.
     pub fn offsets(&self) -> [f32; 3] {
@@ -252,6 +258,8 @@ pub trait Step {
     fn max_age_samples(&self) -> usize;
     /// [`Pipeline::offsets`].
     fn offsets(&self) -> [f32; 3];
+    /// [`Pipeline::model_offsets`].
+    fn model_offsets(&self) -> [f32; 3];
     /// The model's identified and adopted f and ξ ([`Model::oscillator`]).
     fn oscillator(&self) -> Option<crate::model::OscillatorReport>;
     /// The model's static friction identified at the slip starts ([`Model::static_friction`]).
@@ -281,6 +289,9 @@ impl<M: Model, D: EventDetector> Step for Pipeline<M, D> {
     }
     fn max_age_samples(&self) -> usize {
         self.detector.max_age_samples()
+    }
+    fn model_offsets(&self) -> [f32; 3] {
+        Pipeline::model_offsets(self)
     }
     fn offsets(&self) -> [f32; 3] {
         Pipeline::offsets(self)

@@ -306,7 +306,7 @@ pub fn replay<W: Write>(
             mu.map(|m| m.mu),
             pipe.oscillator(),
             pipe.static_friction(),
-            pipe.offsets(),
+            crate::run::sum(pipe.offsets(), pipe.model_offsets()),
             (model == Model::StickSlip).then(|| pipe.gain_mismatch()),
             pipe.friction_law(),
         ),

@@ -267,7 +267,7 @@ fn outcome(
             mu.map(|m| m.mu),
             runner.pipe.oscillator(),
             runner.pipe.static_friction(),
-            runner.pipe.offsets(),
+            sum(runner.pipe.offsets(), runner.pipe.model_offsets()),
             (model == Model::StickSlip).then(|| runner.pipe.gain_mismatch()),
             runner.pipe.friction_law(),
         ),
@@ -333,4 +333,9 @@ pub fn run_to_file(
     let file = std::fs::File::create(path)
         .with_context(|| format!("cannot create the output file {}", path.display()))?;
     run(scene, file, opts, stop)
+}
+
+/// The offsets the pipeline removed and those its model removed besides (table, base, top).
+pub fn sum(a: [f32; 3], b: [f32; 3]) -> [f32; 3] {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
 }

@@ -61,7 +61,9 @@ impl TruthStats {
 /// coefficient is μ̂ when the model identified it, else the prior's; the offsets are those the
 /// pipeline removed: table and top from the rest before the input (zero without one), the base
 /// from the rest plus the slip acceleration's offset its detector tracks (the base against the
-/// table), stick-slip model only.
+/// table), stick-slip model only; plus those the stick-slip model identified from the sliding
+/// phases and removes from its inputs (the table's, which the base channel also reads, and in
+/// fuse mode the top's).
 #[derive(Debug, Clone, Serialize)]
 pub struct Identified {
     /// Natural frequency (Hz).

@@ -11,9 +11,11 @@
 //!   state towards it (its error is r times the base accelerometer's, ~1/17 on the Table 1
 //!   specimen), so each stuck phase starts from the right state.
 //!
-//! **Labels.** The detector reports events late (their age): a base sample waits [`DELAY`]
-//! samples before it goes to the identifier, so that every event reported meanwhile labels it
-//! with its true phase; samples within [`GUARD`] samples of an event are not used.
+//! **Labels.** The samples are averaged over the identifier's blocks as they come (base and top:
+//! a few instructions per sample). The detector reports events late (their age): a block waits
+//! in a ring of [`BLOCKS`] before it goes to the identification, so that every event reported
+//! meanwhile labels it with its true phase; a block with a sample within [`GUARD`] samples of an
+//! event is not used.
 //!
 //! In **fuse** mode the same identification gives only the table accelerometer's offset (f, ξ
 //! and μ come from the top accelerometer there), and the momentum balance gives the top
@@ -34,15 +36,16 @@ use ssvr_core::sliding_id::{SlidingEstimate, SlidingIdentifier};
 use ssvr_core::stick_slip::{MuEstimate, StickSlipCoefficients};
 use ssvr_core::StructureParams;
 
-/// Samples a base sample waits for late events before it is labelled (at least the
-/// detector's longest reporting delay at the scenes' rates: its `max_age_samples`).
-pub const DELAY: usize = 128;
+/// Most blocks that wait for late events before they are used: as many as cover the detector's
+/// longest reporting delay (the plan's `max_age`) and [`GUARD`], plus one (≥ 32 samples at any
+/// rate).
+pub const BLOCKS: usize = 32;
 /// Samples either side of an event's time that are not used.
 pub const GUARD: f32 = 2.0;
 /// Forgetting per identification row (a memory of ~10⁵ rows: tens of seconds of sliding).
 pub const FORGETTING_PER_ROW: f64 = 0.99999;
-/// Samples between two adoption checks until μ̂ is first adopted (at most [`FAST_CHECKS`]
-/// estimates): an early adoption shortens the time a wrong prior's μ is in use (a multiple of the firmware's batch, so that a check
+/// Samples between two adoption checks until μ̂ (fuse mode: the top offset) is first adopted
+/// (at most [`FAST_CHECKS`] estimates): an early adoption shortens the time a wrong prior's μ is in use (a multiple of the firmware's batch, so that a check
 /// falls on a batch's end however the samples come).
 pub const FIRST_CHECK_EVERY: u32 = 128;
 /// … and once it is: a check solves 4×4 normal equations in f64 (thousands of M4F
@@ -53,10 +56,6 @@ pub const CHECK_EVERY: u32 = 1024;
 pub const FAST_CHECKS: u8 = 16;
 const _: () = assert!(FIRST_CHECK_EVERY.is_multiple_of(crate::pipeline::BATCH as u32));
 const _: () = assert!(CHECK_EVERY.is_multiple_of(FIRST_CHECK_EVERY));
-/// One sliding sample in this many is a row of the fuse mode's top fit (its cost per sample,
-/// f32 products and their f64 pages, divided by it; thousands of rows per second of sliding
-/// remain at 10 kHz).
-pub const TOP_FIT_EVERY: u8 = 8;
 /// Largest relative standard deviation of μ̂ for adoption (a μ known to 2 % is far better than
 /// a prior 10–25 % off, and later checks refine it).
 pub const MAX_REL_STD_MU: f64 = 2e-2;
@@ -67,13 +66,20 @@ pub const MIN_REL_CHANGE_MU: f64 = 1e-4;
 #[derive(Debug, Clone)]
 pub struct BaseTuning {
     id: SlidingIdentifier<f32>,
-    /// The delay line: base (and, fuse mode, top) samples and their phase labels; `at` the slot
-    /// of the next sample.
-    ring: [f32; DELAY],
-    top_ring: [f32; DELAY],
-    labels: [i8; DELAY],
+    /// The blocks waiting for late events (`at`: the slot of the next, `filled` of them), in
+    /// the first `wait` slots: the blocks that cover the detector's longest delay.
+    ring: [Block; BLOCKS],
+    wait: usize,
     at: usize,
     filled: usize,
+    /// The block being summed.
+    cur: Block,
+    cur_n: u32,
+    /// Samples per block, and its inverse.
+    d: u32,
+    inv_d: f32,
+    /// The index of the next sample (wrapping).
+    sample: u32,
     /// The phase level of the samples to come, and how many of them the guard drops.
     level: i8,
     skip: u8,
@@ -107,24 +113,47 @@ pub struct BaseTuning {
     /// The top accelerometer's offset in use (m/s²) and its standard deviation.
     top_offset: f32,
     top_offset_std_use: f64,
-    /// Sliding samples until the next row of the top fit.
-    top_skip: u8,
+}
+
+/// A block of samples: base and top sums (averages once closed), its phase level (0: not to
+/// use) and its first sample's index.
+#[derive(Debug, Clone, Copy, Default)]
+struct Block {
+    base: f32,
+    top: f32,
+    level: i8,
+    start: u32,
 }
 
 impl BaseTuning {
     /// The tuning of the prior `params` at `rate` (`None` if the identifier cannot be set up);
     /// `zeroed`: the accelerometers are zeroed on a rest before the input (an estimate from one
-    /// direction of sliding may then take the offset as 0).
-    pub fn new(params: StructureParams, rate: f64, zeroed: bool, fuse: bool) -> Option<Self> {
+    /// direction of sliding may then take the offset as 0); `max_age`: the detector's longest
+    /// reporting delay (samples).
+    pub fn new(
+        params: StructureParams,
+        rate: f64,
+        zeroed: bool,
+        fuse: bool,
+        max_age: usize,
+    ) -> Option<Self> {
         let m = 1.0 + params.m1_kg / params.m2_kg;
         let root_m = libm::sqrt(m);
         let omega = 2.0 * core::f64::consts::PI * params.natural_frequency_hz * root_m;
         let id = SlidingIdentifier::new(rate, omega, FORGETTING_PER_ROW).ok()?;
+        let d = id.decimation() as usize;
+        let wait = (max_age + GUARD as usize + 1).div_ceil(d) + 1;
         Some(Self {
-            id,
-            ring: [0.0; DELAY],
-            top_ring: [0.0; DELAY],
-            labels: [0; DELAY],
+            ring: [Block::default(); BLOCKS],
+            wait: wait.clamp(2, BLOCKS),
+            cur: Block {
+                level: 1,
+                ..Block::default()
+            },
+            cur_n: 0,
+            d: id.decimation(),
+            inv_d: 1.0 / id.decimation() as f32,
+            sample: 0,
             at: 0,
             filled: 0,
             level: 0,
@@ -148,23 +177,30 @@ impl BaseTuning {
             top_fit: PagedNormal::new(FORGETTING_PER_ROW),
             top_offset: 0.0,
             top_offset_std_use: 0.0,
-            top_skip: TOP_FIT_EVERY,
+            id,
         })
     }
 
     /// An event `age` samples before the next sample, setting the phase `level` (0: stuck):
-    /// the samples since it are relabelled, those within [`GUARD`] of it dropped.
+    /// the blocks after it are relabelled, those with a sample within [`GUARD`] of it dropped.
     pub fn event(&mut self, level: i8, age: f32) {
-        let reach = libm::ceilf(age + GUARD).clamp(0.0, self.filled as f32) as usize;
-        for d in 1..=reach {
-            let slot = (self.at + DELAY - d) % DELAY;
-            let df = d as f32;
-            if let Some(l) = self.labels.get_mut(slot) {
-                if df < age - GUARD {
-                    *l = level;
-                } else if df <= age + GUARD {
-                    *l = 0;
-                }
+        // Distances back from the next sample: a sample j is after the event (and its guard)
+        // when sample − j < age − GUARD, before it when sample − j > age + GUARD.
+        if self.cur_n as f32 > age - GUARD {
+            self.cur.level = 0;
+        }
+        let d = self.d as f32;
+        for k in 1..=self.filled {
+            let Some(b) = self.ring.get_mut((self.at + self.wait - k) % self.wait) else {
+                break;
+            };
+            let first = self.sample.wrapping_sub(b.start) as f32;
+            if first < age - GUARD {
+                b.level = level;
+            } else if first - d + 1.0 > age + GUARD {
+                break;
+            } else {
+                b.level = 0;
             }
         }
         self.level = level;
@@ -201,35 +237,53 @@ impl BaseTuning {
     #[inline(always)]
     pub fn push_run(&mut self, base: &[f32], top: &[f32]) {
         for (&b, &t) in base.iter().zip(top) {
-            let (Some(y), Some(l), Some(yt)) = (
-                self.ring.get_mut(self.at),
-                self.labels.get_mut(self.at),
-                self.top_ring.get_mut(self.at),
-            ) else {
-                return;
-            };
-            if self.filled == DELAY {
-                self.id.push(*y, *l);
-                if self.fuse && *l != 0 {
-                    self.top_skip = self.top_skip.wrapping_sub(1);
-                    if self.top_skip == 0 && (*y - *yt).is_finite() {
-                        self.top_skip = TOP_FIT_EVERY;
-                        let s = if *l > 0 { 1.0 } else { -1.0 };
-                        self.top_fit.add(&[*y, s, 1.0], *yt);
-                    }
-                }
-            } else {
-                self.filled += 1;
-            }
-            *y = b;
-            *yt = t;
-            *l = if self.skip > 0 {
+            if self.skip > 0 {
                 self.skip -= 1;
-                0
-            } else {
-                self.level
-            };
-            self.at = if self.at + 1 == DELAY { 0 } else { self.at + 1 };
+                self.cur.level = 0;
+            }
+            self.cur.base += b;
+            self.cur.top += t;
+            self.cur_n += 1;
+            self.sample = self.sample.wrapping_add(1);
+            if self.cur_n >= self.d {
+                self.close();
+            }
+        }
+    }
+
+    /// Closes the block being summed: into the ring, the oldest one out of it to the
+    /// identification.
+    #[inline(never)]
+    fn close(&mut self) {
+        let mut b = self.cur;
+        (b.base, b.top) = (b.base * self.inv_d, b.top * self.inv_d);
+        if b.level != 0 {
+            b.level = self.level;
+        }
+        self.cur = Block {
+            base: 0.0,
+            top: 0.0,
+            level: 1,
+            start: self.sample,
+        };
+        self.cur_n = 0;
+        let Some(slot) = self.ring.get_mut(self.at) else {
+            return;
+        };
+        let old = core::mem::replace(slot, b);
+        self.at = if self.at + 1 >= self.wait {
+            0
+        } else {
+            self.at + 1
+        };
+        if self.filled < self.wait {
+            self.filled += 1;
+            return;
+        }
+        self.id.push_block(old.base, old.level);
+        if self.fuse && old.level != 0 && (old.base - old.top).is_finite() {
+            let s = if old.level > 0 { 1.0 } else { -1.0 };
+            self.top_fit.add(&[old.base, s, 1.0], old.top);
         }
     }
 
@@ -240,7 +294,13 @@ impl BaseTuning {
             self.countdown -= samples;
             return (None, None);
         }
-        self.countdown = if self.fast_checks > 0 && self.mu_adoptions == 0 && !self.fuse {
+        // (Until the first adoption: μ in predict mode, the top offset in fuse mode.)
+        let first = if self.fuse {
+            self.top_offset_std_use == 0.0
+        } else {
+            self.mu_adoptions == 0
+        };
+        self.countdown = if self.fast_checks > 0 && first {
             FIRST_CHECK_EVERY
         } else {
             CHECK_EVERY
@@ -402,6 +462,7 @@ impl BaseSlot for Option<BaseTuning> {
             plan.specimen.sample_rate_hz,
             plan.rest_samples > 0,
             plan.mode == super::Mode::Fuse,
+            plan.max_age,
         )
     }
     #[inline(always)]

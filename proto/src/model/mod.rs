@@ -202,6 +202,12 @@ pub trait Model {
     fn friction_law(&self) -> Option<FrictionReport> {
         None
     }
+    /// The accelerometers' offsets the model itself identified and removes from its inputs
+    /// (m/s²; table, base, top), beyond the pipeline's (the stick-slip model's
+    /// [`BaseTuning`]); zeros for a model that does not.
+    fn offsets(&self) -> [f32; 3] {
+        [0.0; 3]
+    }
 }
 
 /// The static (breakaway) friction coefficient identified at the detected slip starts
@@ -277,6 +283,9 @@ impl<M: Model + ?Sized> Model for std::boxed::Box<M> {
     }
     fn friction_law(&self) -> Option<FrictionReport> {
         (**self).friction_law()
+    }
+    fn offsets(&self) -> [f32; 3] {
+        (**self).offsets()
     }
 }
 

@@ -280,8 +280,8 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot> Model
 
     fn mu_estimate(&self) -> Option<MuEstimate> {
         match self.base_tuning.get() {
-            Some(b) => b.mu_estimate(),
-            None => self.est.mu_estimate(),
+            Some(b) if !self.fuse => b.mu_estimate(),
+            _ => self.est.mu_estimate(),
         }
     }
 
@@ -291,13 +291,21 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot> Model
 
     fn oscillator(&self) -> Option<OscillatorReport> {
         match self.base_tuning.get() {
-            Some(b) => Some(b.report()),
-            None => self.tuning.as_ref().map(Tuning::report),
+            Some(b) if !self.fuse => Some(b.report()),
+            _ => self.tuning.as_ref().map(Tuning::report),
         }
     }
 
     fn friction_law(&self) -> Option<FrictionReport> {
         self.friction.get().map(SlipFriction::report)
+    }
+
+    fn offsets(&self) -> [f32; 3] {
+        // The base channel reads the table's offset too once the detector has removed their
+        // difference.
+        self.base_tuning
+            .get()
+            .map_or([0.0; 3], |b| [b.offset(), b.offset(), b.top_offset()])
     }
 
     fn static_friction(&self) -> Option<StaticFriction> {
