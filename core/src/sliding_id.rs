@@ -228,8 +228,8 @@ impl<T: Real> SlidingIdentifier<T> {
             return None;
         }
         let h = self.h;
-        let zw = -libm::log(r2) / (2.0 * h);
-        let wd = libm::acos(cos_wd) / h;
+        let zw = -ln(r2)? / (2.0 * h);
+        let wd = acos(cos_wd)? / h;
         let omega = libm::sqrt(zw * zw + wd * wd);
         let zeta = zw / omega;
         let friction_accel = gamma / alpha;
@@ -259,6 +259,50 @@ impl<T: Real> SlidingIdentifier<T> {
             rows,
         })
     }
+}
+
+/// ln x for x in [0.05, 1] by the series of artanh ((x − 1)/(x + 1) within 0.91 of 0: at most
+/// 200 terms), `None` outside: the firmware needs no `log` in its flash for it.
+pub(crate) fn ln(x: f64) -> Option<f64> {
+    if !(0.05..=1.0).contains(&x) {
+        return None;
+    }
+    let z = (x - 1.0) / (x + 1.0);
+    let z2 = z * z;
+    let (mut sum, mut term, mut k) = (0.0, z, 1.0);
+    while k < 400.0 {
+        let add = term / k;
+        sum += add;
+        if add.abs() <= 1e-17 * sum.abs() {
+            break;
+        }
+        term *= z2;
+        k += 2.0;
+    }
+    Some(2.0 * sum)
+}
+
+/// acos c for c in [0, 1] (angles up to π/2; the blocks are ~0.25 rad of the oscillation) as
+/// 2·asin √((1 − c)/2) by the arcsine's series, `None` outside.
+pub(crate) fn acos(c: f64) -> Option<f64> {
+    if !(0.0..=1.0).contains(&c) {
+        return None;
+    }
+    let x2 = 0.5 * (1.0 - c);
+    let x = libm::sqrt(x2);
+    // asin x = Σ a_k x^(2k+1)/(2k + 1), a_(k+1) = a_k·(2k + 1)/(2k + 2); x ≤ 1/√2.
+    let (mut sum, mut a, mut p, mut k) = (0.0, 1.0, x, 0.0);
+    while k < 200.0 {
+        let add = a * p / (2.0 * k + 1.0);
+        sum += add;
+        if add <= 1e-17 * sum {
+            break;
+        }
+        a *= (2.0 * k + 1.0) / (2.0 * k + 2.0);
+        p *= x2;
+        k += 1.0;
+    }
+    Some(2.0 * sum)
 }
 
 #[cfg(test)]

@@ -171,11 +171,12 @@ pub fn model_step(
     Ok((frame.prediction, used))
 }
 
-/// A tracker of the base accelerometer's offset as the pipeline removes it: the plan's
+/// A tracker of the base accelerometer's offset and gain as the pipeline removes them: the plan's
 /// slip-acceleration detector (the same code and ring) fed each sample's zeroed channels and
-/// flags, returning its offset after the sample (0 for a displacement detector). The f64
-/// reference of `host-sim qemu` reads the base the way the model does with it.
-pub type OffsetTracker = Box<dyn FnMut(&[f32; ssvr_proto::CHANNELS], u8) -> f32>;
+/// flags, returning its offset and gain mismatch after the sample (0 for a displacement
+/// detector). The f64 reference of `host-sim qemu` reads the base the way the model does with
+/// it (`ssvr_proto::pipeline::base_in_table_units`).
+pub type OffsetTracker = Box<dyn FnMut(&[f32; ssvr_proto::CHANNELS], u8) -> (f32, f32)>;
 
 /// [`OffsetTracker`] of a plan.
 pub fn base_offset_tracker(plan: &Plan) -> Result<OffsetTracker> {
@@ -184,7 +185,7 @@ pub fn base_offset_tracker(plan: &Plan) -> Result<OffsetTracker> {
         Ok(Box::new(move |ch, f| {
             let table = ch[ssvr_proto::Channel::TableAccel.index()];
             let _ = d.process_with_reference(D::INPUT.of(ch, f), table);
-            d.offset()
+            (d.offset(), d.gain_mismatch())
         }))
     }
     macro_rules! rings {
@@ -196,7 +197,7 @@ pub fn base_offset_tracker(plan: &Plan) -> Result<OffsetTracker> {
         };
     }
     match plan.detector {
-        DetectorPlan::Displacement(_) => Ok(Box::new(|_, _| 0.0)),
+        DetectorPlan::Displacement(_) => Ok(Box::new(|_, _| (0.0, 0.0))),
         DetectorPlan::SlipAcceleration(_) => {
             rings!(AccelerationDetector, 8 16 32 64 128 256 512 1024)
         }

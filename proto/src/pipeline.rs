@@ -39,6 +39,15 @@ const _: () = assert!(
     "events of a batch are a u32 mask"
 );
 
+/// The base accelerometer's sample `base` in the table accelerometer's units: less the
+/// `offset` of the slip acceleration, divided by 1 + the gain mismatch `k` (the base's gain
+/// relative to the table's, minus 1) that the detector tracks. The pipeline and the host's f64
+/// reference use this one function.
+#[inline(always)]
+pub fn base_in_table_units(base: f32, offset: f32, k: f32) -> f32 {
+    (base - offset) / (1.0 + k)
+}
+
 /// Where the model's friction events come from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum EventSource {
@@ -184,9 +193,11 @@ impl<M: Model, D: EventDetector> Pipeline<M, D> {
             D::INPUT.of(&channels, f),
             channels[Channel::TableAccel.index()],
         );
-        // The base accelerometer's offset against the table's, tracked by the detector while the
-        // base sticks: the models read the base corrected by it.
-        channels[Channel::BaseAccel.index()] -= self.detector.offset();
+        // The base accelerometer's offset and gain against the table's, tracked by the detector
+        // while the base sticks: the models read the base corrected by them (in the table
+        // accelerometer's units).
+        let base = &mut channels[Channel::BaseAccel.index()];
+        *base = base_in_table_units(*base, self.detector.offset(), self.detector.gain_mismatch());
         let event = match self.source {
             EventSource::Detector => detected.as_ref().map(Event::from_detector),
             EventSource::Log => s.reversal.map(|r| Event {

@@ -140,3 +140,21 @@ fn an_overdamped_sliding_oscillator_gives_no_estimate() {
     }
     assert!(id.estimate(true).is_none());
 }
+
+#[test]
+fn the_series_match_libm() {
+    for k in 0..=1000 {
+        let x = 0.05 + 0.95 * k as f64 / 1000.0;
+        let l = super::ln(x).unwrap();
+        assert!((l - libm::log(x)).abs() <= 1e-13, "ln {x}: {l}");
+        let c = k as f64 / 1000.0;
+        let a = super::acos(c).unwrap();
+        assert!(
+            (a - libm::acos(c)).abs() <= 2e-15,
+            "acos {c}: {a} {}",
+            libm::acos(c)
+        );
+    }
+    assert!(super::ln(0.01).is_none() && super::ln(1.5).is_none());
+    assert!(super::acos(-0.1).is_none() && super::acos(1.1).is_none());
+}

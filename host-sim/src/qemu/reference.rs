@@ -196,7 +196,9 @@ impl Reference {
             } => {
                 let mut channels = s.channels;
                 zeroing.apply(k as u32, &mut channels, f.flags);
-                channels[ssvr_proto::Channel::BaseAccel.index()] -= base_offset(&channels, f.flags);
+                let (off, k) = base_offset(&channels, f.flags);
+                let base = &mut channels[ssvr_proto::Channel::BaseAccel.index()];
+                *base = ssvr_proto::pipeline::base_in_table_units(*base, off, k);
                 if let Some(e) = f.event.filter(|_| f.flags & flags::EVENT_PUSHED != 0) {
                     let phase = if e.is_stick() { 0 } else { e.level };
                     if let Some(fr) = friction.as_mut() {
@@ -238,7 +240,7 @@ impl Reference {
                     let y_in = if *predict {
                         b.top_of(base, est.phase().level())
                     } else {
-                        top as f32 - b.top_offset()
+                        b.top_corrected(top as f32)
                     };
                     let y = est.update(f64::from(table - b.offset()), f64::from(y_in));
                     b.push_run(&[base], &[top as f32]);

@@ -56,6 +56,9 @@ pub const CHECK_EVERY: u32 = 1024;
 pub const FAST_CHECKS: u8 = 16;
 const _: () = assert!(FIRST_CHECK_EVERY.is_multiple_of(crate::pipeline::BATCH as u32));
 const _: () = assert!(CHECK_EVERY.is_multiple_of(FIRST_CHECK_EVERY));
+/// Largest top-accelerometer gain error (relative to the base's) taken for one: beyond it the
+/// fit is wrong data, not a gain.
+pub const MAX_GAIN_ERROR: f64 = 0.1;
 /// Largest relative standard deviation of μ̂ for adoption (a μ known to 2 % is far better than
 /// a prior 10–25 % off, and later checks refine it).
 pub const MAX_REL_STD_MU: f64 = 2e-2;
@@ -113,6 +116,10 @@ pub struct BaseTuning {
     /// The top accelerometer's offset in use (m/s²) and its standard deviation.
     top_offset: f32,
     top_offset_std_use: f64,
+    /// 1/G of the top accelerometer's gain G relative to the base's in use, and G's standard
+    /// deviation.
+    top_scale: f32,
+    top_gain_std_use: f64,
 }
 
 /// A block of samples: base and top sums (averages once closed), its phase level (0: not to
@@ -177,6 +184,8 @@ impl BaseTuning {
             top_fit: PagedNormal::new(FORGETTING_PER_ROW),
             top_offset: 0.0,
             top_offset_std_use: 0.0,
+            top_scale: 1.0,
+            top_gain_std_use: 0.0,
             id,
         })
     }
@@ -230,6 +239,17 @@ impl BaseTuning {
     #[inline(always)]
     pub fn top_offset(&self) -> f32 {
         self.top_offset
+    }
+
+    /// The measured top acceleration `m` corrected by the offset and gain in use (fuse mode).
+    #[inline(always)]
+    pub fn top_corrected(&self, m: f32) -> f32 {
+        (m - self.top_offset) * self.top_scale
+    }
+
+    /// The top accelerometer's gain relative to the base's in use (fuse mode; 1 in predict).
+    pub fn top_gain(&self) -> f32 {
+        1.0 / self.top_scale
     }
 
     /// A run of base and top samples (NaN: missing or saturated) in the phase of the last
@@ -316,10 +336,11 @@ impl BaseTuning {
 
     #[inline(never)]
     fn adopt(&mut self) -> (Option<StickSlipCoefficients<f32>>, Option<f32>) {
+        let estimate = self.id.estimate(self.zeroed);
         if self.fuse {
-            self.adopt_top_offset();
+            self.adopt_top(estimate.as_ref());
         }
-        let Some(e) = self.id.estimate(self.zeroed) else {
+        let Some(e) = estimate else {
             return (None, None);
         };
         self.last = Some(e);
@@ -360,19 +381,38 @@ impl BaseTuning {
         (coefficients, mu)
     }
 
-    /// Fuse mode: the top accelerometer's offset from the momentum balance's fit, adopted when
-    /// it differs significantly from the one in use or is known twice as well.
-    fn adopt_top_offset(&mut self) {
+    /// Fuse mode: the top accelerometer's offset and gain (relative to the base's) from the
+    /// momentum balance's fit, each adopted when it differs significantly from the one in use or
+    /// is known twice as well. With t = G·ü1 + b_top and ü1 = (1 + r)·μ·g·s − r·(ü2 − b_table):
+    /// θ = (−G·r, G·(1 + r)·μ·g, G·r·b_table + b_top), so b_top = θ2 + θ0·b_table and, with μ·g
+    /// from the sliding base (`e`), G = θ1/(μ·g) + θ0: neither needs the prior's masses.
+    fn adopt_top(&mut self, e: Option<&SlidingEstimate>) {
         let Some(f) = self.top_fit.solve::<3>() else {
             return;
         };
-        // d = r·b_table + b_top, r = −θ0.
         let b = f.theta[2] + f.theta[0] * self.offset as f64;
         let sd = libm::sqrt(libm::fmax(f.cov[2][2], 0.0));
         let change = libm::fabs(b - self.top_offset as f64);
         if sd > 0.0 && (change > 3.0 * sd || sd < 0.5 * self.top_offset_std_use) {
             self.top_offset = b as f32;
             self.top_offset_std_use = sd;
+        }
+        let Some(e) = e else {
+            return;
+        };
+        let fa = e.friction_accel;
+        let gain = f.theta[1] / fa + f.theta[0];
+        let rel_fa = e.friction_accel_std / fa;
+        let var = f.cov[1][1] / (fa * fa)
+            + f.cov[0][0]
+            + 2.0 * f.cov[0][1] / fa
+            + (f.theta[1] / fa) * (f.theta[1] / fa) * rel_fa * rel_fa;
+        let sd = libm::sqrt(libm::fmax(var, 0.0));
+        let change = libm::fabs(gain - 1.0 / self.top_scale as f64);
+        let plausible = libm::fabs(gain - 1.0) < MAX_GAIN_ERROR;
+        if plausible && sd > 0.0 && (change > 3.0 * sd || sd < 0.5 * self.top_gain_std_use) {
+            self.top_scale = (1.0 / gain) as f32;
+            self.top_gain_std_use = sd;
         }
     }
 

@@ -336,7 +336,7 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
             return;
         };
         let level = self.est.phase().level();
-        let (off, top_off, fuse) = (bt.offset(), bt.top_offset(), self.fuse);
+        let (off, fuse) = (bt.offset(), self.fuse);
         let (mut top, mut good, mut u) = ([0.0f32; BATCH], [0.0f32; BATCH], [0.0f32; BATCH]);
         for (((((y, g), u), f), (&b, &t)), &m) in top
             .iter_mut()
@@ -352,7 +352,7 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
                 f32::NAN
             };
             *y = if fuse {
-                m - top_off
+                bt.top_corrected(m)
             } else {
                 bt.top_of(*g, level)
             };
@@ -377,8 +377,8 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
         if let Some(mu) = mu {
             self.est.set_friction(mu);
         }
-        if let Some(t) = &mut self.tuning {
-            t.push_run(measured, base);
+        if let (Some(t), Some(top)) = (&mut self.tuning, top.get(..n)) {
+            t.push_run(top, base);
             if let Some(c) = t.check(n as u32) {
                 self.est.retune(c);
             }
