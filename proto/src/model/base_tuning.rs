@@ -81,8 +81,6 @@ pub struct BaseTuning {
     /// Samples per block, and its inverse.
     d: u32,
     inv_d: f32,
-    /// The index of the next sample (wrapping).
-    sample: u32,
     /// The phase level of the samples to come, and how many of them the guard drops.
     level: i8,
     skip: u8,
@@ -160,7 +158,6 @@ impl BaseTuning {
             cur_n: 0,
             d: id.decimation(),
             inv_d: 1.0 / id.decimation() as f32,
-            sample: 0,
             at: 0,
             filled: 0,
             level: 0,
@@ -199,11 +196,12 @@ impl BaseTuning {
             self.cur.level = 0;
         }
         let d = self.d as f32;
+        let sample = self.cur.start.wrapping_add(self.cur_n);
         for k in 1..=self.filled {
             let Some(b) = self.ring.get_mut((self.at + self.wait - k) % self.wait) else {
                 break;
             };
-            let first = self.sample.wrapping_sub(b.start) as f32;
+            let first = sample.wrapping_sub(b.start) as f32;
             if first < age - GUARD {
                 b.level = level;
             } else if first - d + 1.0 > age + GUARD {
@@ -256,18 +254,36 @@ impl BaseTuning {
     /// event (the tops are read in fuse mode only).
     #[inline(always)]
     pub fn push_run(&mut self, base: &[f32], top: &[f32]) {
-        for (&b, &t) in base.iter().zip(top) {
+        let (mut base, mut top) = (base, top);
+        loop {
+            // The samples up to the end of the block being summed.
+            let k = (self.d.saturating_sub(self.cur_n) as usize)
+                .min(base.len())
+                .min(top.len());
+            let (Some((b_now, b_rest)), Some((t_now, t_rest))) =
+                (base.split_at_checked(k), top.split_at_checked(k))
+            else {
+                return;
+            };
+            if k == 0 {
+                return;
+            }
             if self.skip > 0 {
-                self.skip -= 1;
+                // A sample within the guard after an event: the block is not used.
+                self.skip = self.skip.saturating_sub(k.min(u8::MAX as usize) as u8);
                 self.cur.level = 0;
             }
-            self.cur.base += b;
-            self.cur.top += t;
-            self.cur_n += 1;
-            self.sample = self.sample.wrapping_add(1);
+            let (mut sb, mut st) = (self.cur.base, self.cur.top);
+            for (&b, &t) in b_now.iter().zip(t_now) {
+                sb += b;
+                st += t;
+            }
+            (self.cur.base, self.cur.top) = (sb, st);
+            self.cur_n += k as u32;
             if self.cur_n >= self.d {
                 self.close();
             }
+            (base, top) = (b_rest, t_rest);
         }
     }
 
@@ -284,7 +300,7 @@ impl BaseTuning {
             base: 0.0,
             top: 0.0,
             level: 1,
-            start: self.sample,
+            start: b.start.wrapping_add(self.d),
         };
         self.cur_n = 0;
         let Some(slot) = self.ring.get_mut(self.at) else {
