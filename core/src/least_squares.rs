@@ -48,9 +48,13 @@ impl<T: Real, const N: usize, const K: usize> PagedNormal<T, N, K> {
         }
     }
 
-    /// One row: regressors `phi`, target `t`.
+    /// One row: regressors `phi`, target `t`. A row whose squares are not finite (an absurd
+    /// sample) is skipped: in the sums it would end the fit for good.
     #[inline(always)]
     pub fn add(&mut self, phi: &[T; N], t: T) {
+        if !phi.iter().fold(t * t, |q, &p| q + p * p).is_finite() {
+            return;
+        }
         let mut k = 0;
         for i in 0..N {
             for j in i..N {

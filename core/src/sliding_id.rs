@@ -138,12 +138,8 @@ impl<T: Real> SlidingIdentifier<T> {
     /// of level or a non-finite sample ends the episode.
     #[inline(always)]
     pub fn push(&mut self, y: T, level: i8) {
-        if level == 0 || level != self.level || !y.is_finite() {
-            self.end_episode();
-            if level == 0 || !y.is_finite() {
-                return;
-            }
-            self.level = level;
+        if !self.enter(y, level) {
+            return;
         }
         self.sum += y;
         self.count += 1;
@@ -160,14 +156,24 @@ impl<T: Real> SlidingIdentifier<T> {
     /// average.
     #[inline(never)]
     pub fn push_block(&mut self, y: T, level: i8) {
+        if self.enter(y, level) {
+            self.row(y);
+        }
+    }
+
+    /// A value `y` of phase `level` in the episode: a level 0, a change of level or a
+    /// non-finite value ends it; whether the value is to be used (it starts a new episode on a
+    /// change of level).
+    #[inline(always)]
+    fn enter(&mut self, y: T, level: i8) -> bool {
         if level == 0 || level != self.level || !y.is_finite() {
             self.end_episode();
             if level == 0 || !y.is_finite() {
-                return;
+                return false;
             }
             self.level = level;
         }
-        self.row(y);
+        true
     }
 
     /// Ends the episode: the next sample starts a new one.

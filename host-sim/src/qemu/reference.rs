@@ -196,9 +196,9 @@ impl Reference {
             } => {
                 let mut channels = s.channels;
                 zeroing.apply(k as u32, &mut channels, f.flags);
-                let (off, k) = base_offset(&channels, f.flags);
+                let (off, gain) = base_offset(&channels, f.flags);
                 let base = &mut channels[ssvr_proto::Channel::BaseAccel.index()];
-                *base = ssvr_proto::pipeline::base_in_table_units(*base, off, k);
+                *base = ssvr_proto::pipeline::base_in_table_units(*base, off, gain);
                 if let Some(e) = f.event.filter(|_| f.flags & flags::EVENT_PUSHED != 0) {
                     let phase = if e.is_stick() { 0 } else { e.level };
                     if let Some(fr) = friction.as_mut() {

@@ -13,9 +13,14 @@
 //!
 //! **Labels.** The samples are averaged over the identifier's blocks as they come (base and top:
 //! a few instructions per sample). The detector reports events late (their age): a block waits
-//! in a ring of [`BLOCKS`] before it goes to the identification, so that every event reported
-//! meanwhile labels it with its true phase; a block with a sample within [`GUARD`] samples of an
-//! event is not used.
+//! in a ring of blocks covering the detector's longest delay (at most [`BLOCKS`]) before it goes
+//! to the identification, so that every event reported meanwhile labels it with its true phase;
+//! a block with a sample within [`GUARD`] samples of an event is not used.
+//!
+//! **Batches.** The adoption checks fall on multiples of [`FIRST_CHECK_EVERY`] samples when the
+//! samples come one at a time or in the firmware's batches of 16 (split at events): then the
+//! host and the firmware are bit for bit equal. Batches of other lengths may check a few samples
+//! later (as the fuse mode's [`Tuning`](super::Tuning) and the friction law's checks do).
 //!
 //! In **fuse** mode the same identification gives only the table accelerometer's offset (f, ξ
 //! and μ come from the top accelerometer there), and the momentum balance gives the top
@@ -37,16 +42,17 @@ use ssvr_core::stick_slip::{MuEstimate, StickSlipCoefficients};
 use ssvr_core::StructureParams;
 
 /// Most blocks that wait for late events before they are used: as many as cover the detector's
-/// longest reporting delay (the plan's `max_age`) and [`GUARD`], plus one (≥ 32 samples at any
-/// rate).
+/// longest reporting delay (the plan's `max_age`) and [`GUARD`], plus one, up to this many (at
+/// low rates, blocks of one sample, fewer than the delay: see [`BaseTuning::new`]).
 pub const BLOCKS: usize = 32;
 /// Samples either side of an event's time that are not used.
 pub const GUARD: f32 = 2.0;
 /// Forgetting per identification row (a memory of ~10⁵ rows: tens of seconds of sliding).
 pub const FORGETTING_PER_ROW: f64 = 0.99999;
-/// Samples between two adoption checks until μ̂ (fuse mode: the top offset) is first adopted
-/// (at most [`FAST_CHECKS`] estimates): an early adoption shortens the time a wrong prior's μ is in use (a multiple of the firmware's batch, so that a check
-/// falls on a batch's end however the samples come).
+/// Samples between two adoption checks until μ̂ (fuse mode: the top offset) is first adopted,
+/// for at most [`FAST_CHECKS`] estimates: an early adoption shortens the time a wrong prior's μ
+/// is in use. A multiple of the firmware's batch, so that a check falls on a batch's end
+/// (module documentation: **Batches**).
 pub const FIRST_CHECK_EVERY: u32 = 128;
 /// … and once it is: a check solves 4×4 normal equations in f64 (thousands of M4F
 /// instructions), and the estimate changes slowly. A check without a new row since the last
@@ -65,7 +71,7 @@ pub const MAX_REL_STD_MU: f64 = 2e-2;
 /// Smallest relative change of μ worth adopting.
 pub const MIN_REL_CHANGE_MU: f64 = 1e-4;
 
-/// The base accelerometer's tuning of the predict mode (module documentation).
+/// The identification from the sliding base of either mode (module documentation).
 #[derive(Debug, Clone)]
 pub struct BaseTuning {
     id: SlidingIdentifier<f32>,
@@ -147,7 +153,12 @@ impl BaseTuning {
         let omega = 2.0 * core::f64::consts::PI * params.natural_frequency_hz * root_m;
         let id = SlidingIdentifier::new(rate, omega, FORGETTING_PER_ROW).ok()?;
         let d = id.decimation() as usize;
-        let wait = (max_age + GUARD as usize + 1).div_ceil(d) + 1;
+        // (At the lowest rates the ring may be shorter than the delay: a late slip start then
+        // finds its first blocks gone, labelled stuck: lost, never mislabelled.)
+        let wait = max_age
+            .saturating_add(GUARD as usize + 1)
+            .div_ceil(d.max(1))
+            .saturating_add(1);
         Some(Self {
             ring: [Block::default(); BLOCKS],
             wait: wait.clamp(2, BLOCKS),
@@ -189,10 +200,15 @@ impl BaseTuning {
 
     /// An event `age` samples before the next sample, setting the phase `level` (0: stuck):
     /// the blocks after it are relabelled, those with a sample within [`GUARD`] of it dropped.
+    /// An event the estimator would reject (a level outside −1..=1, an age not finite or
+    /// negative) changes nothing; the model passes only those it pushed.
     pub fn event(&mut self, level: i8, age: f32) {
+        if !((-1..=1).contains(&level) && age.is_finite() && age >= 0.0) {
+            return;
+        }
         // Distances back from the next sample: a sample j is after the event (and its guard)
         // when sample − j < age − GUARD, before it when sample − j > age + GUARD.
-        if self.cur_n as f32 > age - GUARD {
+        if self.cur_n as f32 >= age - GUARD {
             self.cur.level = 0;
         }
         let d = self.d as f32;
@@ -211,8 +227,14 @@ impl BaseTuning {
             }
         }
         self.level = level;
+        // (0 ≤ age: ahead ≤ GUARD.)
         let ahead = GUARD - age;
-        self.skip = if ahead >= 0.0 { ahead as u8 + 1 } else { 0 };
+        let skip = if ahead >= 0.0 {
+            (ahead as u8).saturating_add(1)
+        } else {
+            0
+        };
+        self.skip = self.skip.max(skip);
     }
 
     /// The top acceleration of a sliding sample from its base acceleration `base` (NaN when
@@ -222,8 +244,7 @@ impl BaseTuning {
         if level == 0 {
             return f32::NAN;
         }
-        let s = if level > 0 { 1.0 } else { -1.0 };
-        (1.0 + self.r) * self.mu_use * self.g * s - self.r * (base - self.offset)
+        (1.0 + self.r) * self.mu_use * self.g * sign(level) - self.r * (base - self.offset)
     }
 
     /// The table (and base) accelerometer's offset in use (m/s²), to remove from the model's
@@ -243,11 +264,6 @@ impl BaseTuning {
     #[inline(always)]
     pub fn top_corrected(&self, m: f32) -> f32 {
         (m - self.top_offset) * self.top_scale
-    }
-
-    /// The top accelerometer's gain relative to the base's in use (fuse mode; 1 in predict).
-    pub fn top_gain(&self) -> f32 {
-        1.0 / self.top_scale
     }
 
     /// A run of base and top samples (NaN: missing or saturated) in the phase of the last
@@ -318,8 +334,7 @@ impl BaseTuning {
         }
         self.id.push_block(old.base, old.level);
         if self.fuse && old.level != 0 && (old.base - old.top).is_finite() {
-            let s = if old.level > 0 { 1.0 } else { -1.0 };
-            self.top_fit.add(&[old.base, s, 1.0], old.top);
+            self.top_fit.add(&[old.base, sign(old.level), 1.0], old.top);
         }
     }
 
@@ -353,6 +368,10 @@ impl BaseTuning {
     #[inline(never)]
     fn adopt(&mut self) -> (Option<StickSlipCoefficients<f32>>, Option<f32>) {
         let estimate = self.id.estimate(self.zeroed);
+        if let Some(e) = &estimate {
+            self.adopt_offset(e);
+        }
+        // (The top's offset from the table's offset of this check.)
         if self.fuse {
             self.adopt_top(estimate.as_ref());
         }
@@ -373,16 +392,6 @@ impl BaseTuning {
         // well as an earlier μ̂ in use (the sliding top acceleration's error is (1 + r)·g times
         // μ's): a right prior stays, a wrong one goes at the first significant estimate.
         let better = sd < 0.5 * self.mu_std_use || change > 3.0 * sd;
-        // The offset likewise, from a fit whose friction is plausible and known.
-        let off_change = libm::fabs(e.offset - self.offset as f64);
-        if plausible
-            && sd < MAX_REL_STD_MU * mu
-            && e.offset_std > 0.0
-            && (off_change > 3.0 * e.offset_std || e.offset_std < 0.5 * self.offset_std_use)
-        {
-            self.offset = e.offset as f32;
-            self.offset_std_use = e.offset_std;
-        }
         let adopt = !self.fuse
             && plausible
             && sd < MAX_REL_STD_MU * mu
@@ -395,6 +404,24 @@ impl BaseTuning {
             self.mu_use
         });
         (coefficients, mu)
+    }
+
+    /// The table accelerometer's offset of the sliding base's fit `e`, adopted like μ (when it
+    /// differs significantly from the one in use or is known twice as well), from a fit whose
+    /// friction is plausible and known.
+    fn adopt_offset(&mut self, e: &SlidingEstimate) {
+        let mu = e.friction_accel / self.g as f64;
+        let known = mu > 0.5 * self.prior_mu
+            && mu < 2.0 * self.prior_mu
+            && e.friction_accel_std / (self.g as f64) < MAX_REL_STD_MU * mu;
+        let change = libm::fabs(e.offset - self.offset as f64);
+        if known
+            && e.offset_std > 0.0
+            && (change > 3.0 * e.offset_std || e.offset_std < 0.5 * self.offset_std_use)
+        {
+            self.offset = e.offset as f32;
+            self.offset_std_use = e.offset_std;
+        }
     }
 
     /// Fuse mode: the top accelerometer's offset and gain (relative to the base's) from the
@@ -467,18 +494,22 @@ impl BaseTuning {
 impl BaseTuning {
     /// The report of [`Model::oscillator`](super::Model::oscillator).
     pub fn report(&self) -> OscillatorReport {
-        let (f, xi, n) = self.in_use();
-        OscillatorReport {
-            estimate: self.estimate(),
-            natural_frequency_hz: f,
-            damping_ratio: xi,
-            adoptions: n,
-        }
+        self.adoption.report(self.estimate())
+    }
+}
+
+/// The friction force's direction of a sliding phase level (±1).
+#[inline(always)]
+fn sign(level: i8) -> f32 {
+    if level > 0 {
+        1.0
+    } else {
+        -1.0
     }
 }
 
 /// Where the stick-slip model keeps a [`BaseTuning`]: `Option<BaseTuning>` (the Coulomb
-/// stick-slip model: `Some` in predict mode), or `()` (the fixed-base model and the model of a
+/// stick-slip model, either mode), or `()` (the fixed-base model and the model of a
 /// velocity-dependent law: no code, no storage).
 pub trait BaseSlot: Clone + core::fmt::Debug {
     /// Whether it can hold a tuning.
@@ -528,5 +559,57 @@ impl BaseSlot for Option<BaseTuning> {
     #[inline(always)]
     fn get_mut(&mut self) -> Option<&mut BaseTuning> {
         self.as_mut()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    extern crate std;
+    use std::vec::Vec;
+
+    fn tuning() -> BaseTuning {
+        let params = StructureParams {
+            m1_kg: 29.5,
+            m2_kg: 1.75,
+            natural_frequency_hz: 7.0,
+            damping_ratio: 0.05,
+            friction_coefficient: 0.2,
+            gravity_m_s2: 9.80665,
+        };
+        BaseTuning::new(params, 10_000.0, false, true, 37).unwrap()
+    }
+
+    /// Events the estimator would reject change nothing and never panic; an event relabels the
+    /// waiting blocks after it and drops those within the guard (the block being summed too).
+    #[test]
+    fn events_relabel_the_waiting_blocks() {
+        let mut b = tuning();
+        let d = b.d as usize;
+        assert!(
+            b.wait >= 2 && b.wait * d >= 37 + 3,
+            "{} blocks of {d}",
+            b.wait
+        );
+        // A slip start long enough ago that no sample to come is within its guard.
+        b.event(1, 10.0);
+        let ones = [1.0f32; 64];
+        // Two whole blocks and 3 samples of a third, sliding +1.
+        b.push_run(&ones[..2 * d + 3], &ones[..2 * d + 3]);
+        let before: Vec<i8> = (0..b.filled).map(|k| b.ring[k].level).collect();
+        assert_eq!(before, [1, 1]);
+        for (level, age) in [(2, 1.0), (-1, f32::NAN), (1, -300.0), (0, f32::INFINITY)] {
+            b.event(level, age);
+            let after: Vec<i8> = (0..b.filled).map(|k| b.ring[k].level).collect();
+            assert_eq!(after, before, "event ({level}, {age}) was applied");
+        }
+        // A stick 5 samples ago: the current block (3 samples, all within 5 + GUARD) dropped,
+        // the second block (samples 3..3 + d back) straddles the guard: dropped; the first
+        // (before the event and its guard) kept.
+        b.event(0, 5.0);
+        assert_eq!(b.cur.level, 0);
+        assert_eq!(b.level, 0);
+        let levels: Vec<i8> = (0..b.filled).map(|k| b.ring[k].level).collect();
+        assert_eq!(levels, [1, 0]);
     }
 }

@@ -49,8 +49,9 @@ pub struct StickSlipModel<
     breakaways: Breakaways,
     /// A velocity-dependent friction law (None: Coulomb).
     friction: F,
-    /// Predict mode: f, ξ and μ from the base accelerometer, and the top acceleration of the
-    /// sliding samples by the momentum balance (None: fuse mode).
+    /// The identification from the sliding base ([`BaseTuning`]): predict mode's f, ξ, μ and
+    /// top acceleration of the sliding samples by the momentum balance, either mode's offsets
+    /// (and fuse mode's top gain).
     base_tuning: B,
 }
 
@@ -171,21 +172,23 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot> Model
                 self.est.set_friction(f.since_slip_start());
             }
         }
-        if let Some(b) = self.base_tuning.get_mut() {
-            b.event(phase, e.age_samples);
-        }
         if e.kind == EventKind::SlipStart && e.age_samples <= self.max_age {
             if let Some(mu) = self.est.breakaway_coefficient(e.age_samples, self.fuse) {
                 self.breakaways.push(mu);
             }
         }
-        if e.age_samples > self.max_age {
+        let pushed = if e.age_samples > self.max_age {
             self.est.push_event(phase, self.max_age)?;
-            Ok(Pushed::Clamped)
+            Pushed::Clamped
         } else {
             self.est.push_event(phase, e.age_samples)?;
-            Ok(Pushed::Yes)
+            Pushed::Yes
+        };
+        // Only an event the estimator took (the f64 reference sees the pushed ones only).
+        if let Some(b) = self.base_tuning.get_mut() {
+            b.event(phase, e.age_samples);
         }
+        Ok(pushed)
     }
 
     #[inline(always)]

@@ -162,9 +162,16 @@ pub struct OscillatorReport {
 impl Tuning {
     /// The report of [`Model::oscillator`](super::Model::oscillator).
     pub fn report(&self) -> OscillatorReport {
+        self.adoption.report(self.estimate())
+    }
+}
+
+impl Adoption {
+    /// The report of an identifier's `estimate` and the f and ξ in use.
+    pub fn report(&self, estimate: Option<OscillatorEstimate>) -> OscillatorReport {
         let (f, xi, n) = self.in_use();
         OscillatorReport {
-            estimate: self.estimate(),
+            estimate,
             natural_frequency_hz: f,
             damping_ratio: xi,
             adoptions: n,
