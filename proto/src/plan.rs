@@ -177,9 +177,10 @@ impl Plan {
     }
 
     /// This plan in `mode`: [`Mode::Predict`] never reads the top accelerometer, so the
-    /// stick-slip estimator neither identifies μ (it keeps the prior's) nor corrects its state
-    /// (no observer). (Identifying μ from the base accelerometer instead was measured and left
-    /// out: docs/ROBUSTNESS.md.)
+    /// stick-slip estimator neither identifies μ from it nor corrects its stuck state (no stuck
+    /// observer); the model's base tuning identifies f, ξ and μ from the sliding base and feeds
+    /// the sliding observer the momentum balance's top acceleration
+    /// ([`BaseTuning`](crate::model::BaseTuning), docs/ROBUSTNESS.md).
     pub fn with_mode(mut self, mode: Mode) -> Self {
         self.mode = mode;
         if mode == Mode::Predict {

@@ -126,7 +126,9 @@ pub enum Mode {
     #[default]
     Fuse = 0,
     /// Never the top accelerometer: the model's own prediction, to show beside the measured top
-    /// acceleration when validating a specimen (no identification, no correction).
+    /// acceleration when validating a specimen (f, ξ, μ and the table's offset identified from
+    /// the sliding base, the sliding state corrected by the momentum balance; never towards the
+    /// measured top).
     Predict = 1,
 }
 
