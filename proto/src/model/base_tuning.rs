@@ -199,7 +199,8 @@ impl BaseTuning {
     }
 
     /// An event `age` samples before the next sample, setting the phase `level` (0: stuck):
-    /// the blocks after it are relabelled, those with a sample within [`GUARD`] of it dropped.
+    /// the blocks after it are relabelled, those with a sample within `GUARD` (2) samples of it
+    /// dropped.
     /// An event the estimator would reject (a level outside −1..=1, an age not finite or
     /// negative) changes nothing; the model passes only those it pushed.
     pub fn event(&mut self, level: i8, age: f32) {
