@@ -194,3 +194,23 @@ pub(crate) fn check(
         Ok(value)
     }
 }
+
+/// A sample rate (Hz): finite and > 0.
+pub(crate) fn check_sample_rate(sample_rate_hz: f64) -> Result<f64, Error> {
+    check(
+        Param::SampleRate,
+        sample_rate_hz,
+        sample_rate_hz > 0.0,
+        "sample rate > 0 Hz",
+    )
+}
+
+/// A forgetting factor: in (0, 1].
+pub(crate) fn check_forgetting(forgetting: f64) -> Result<f64, Error> {
+    check(
+        Param::Forgetting,
+        forgetting,
+        forgetting > 0.0 && forgetting <= 1.0,
+        "forgetting factor in (0, 1]",
+    )
+}

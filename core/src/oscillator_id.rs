@@ -26,7 +26,7 @@
 //! by √(blocks per filter time constant) for the correlation the filters put between blocks.
 //! A sample flagged missing or saturated repeats the last valid pair.
 
-use crate::error::{check, Error, Param};
+use crate::error::{check, check_forgetting, check_sample_rate, Error, Param};
 use crate::math::Real;
 
 /// The identified oscillator.
@@ -95,24 +95,14 @@ impl<T: Real> OscillatorIdentifier<T> {
         prior_frequency_hz: f64,
         forgetting: f64,
     ) -> Result<Self, Error> {
-        check(
-            Param::SampleRate,
-            sample_rate_hz,
-            sample_rate_hz > 0.0 && sample_rate_hz.is_finite(),
-            "sample rate > 0 Hz",
-        )?;
+        check_sample_rate(sample_rate_hz)?;
         check(
             Param::NaturalFrequency,
             prior_frequency_hz,
             prior_frequency_hz > 0.0 && prior_frequency_hz < sample_rate_hz / 8.0,
             "0 < natural frequency < sample rate / 8",
         )?;
-        check(
-            Param::Forgetting,
-            forgetting,
-            forgetting > 0.0 && forgetting <= 1.0,
-            "forgetting factor in (0, 1]",
-        )?;
+        check_forgetting(forgetting)?;
         let d = libm::floor(sample_rate_hz / DECIMATED_RATE_HZ).clamp(1.0, MAX_DECIMATION as f64);
         let decimation = d as u32;
         let h = d / sample_rate_hz;

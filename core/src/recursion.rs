@@ -31,7 +31,7 @@
 
 use crate::closed_form::duhamel::ReversalTrain;
 use crate::closed_form::free_vibration::Kernel;
-use crate::error::{check, Error, Param};
+use crate::error::{Error, Param};
 use crate::math::{Libm, Real, Transcendentals};
 use crate::structure::Structure;
 use core::marker::PhantomData;
@@ -59,12 +59,7 @@ pub struct Coefficients<T, const K: usize> {
 impl<T: Real, const K: usize> Coefficients<T, K> {
     /// Compute the coefficients for `structure` sampled at `sample_rate_hz`.
     pub fn new(structure: &Structure, sample_rate_hz: f64) -> Result<Self, Error> {
-        check(
-            Param::SampleRate,
-            sample_rate_hz,
-            sample_rate_hz > 0.0,
-            "sample rate > 0 Hz",
-        )?;
+        crate::error::check_sample_rate(sample_rate_hz)?;
         if K == 0 {
             return Err(Error::OutOfRange {
                 param: Param::TableLength,

@@ -29,7 +29,7 @@
 //! estimate solves the 4×4 normal equations in f64; the standard deviations are the formal
 //! ones, σ²·S⁻¹, carried to ω, ζ, μ·g and the offset to first order.
 
-use crate::error::{check, Error, Param};
+use crate::error::{check, check_forgetting, check_sample_rate, Error, Param};
 use crate::least_squares::PagedNormal;
 use crate::math::Real;
 /// The block duration the identifier aims at, in radians of the prior's sliding oscillator
@@ -89,24 +89,14 @@ impl<T: Real> SlidingIdentifier<T> {
     /// An identifier for samples at `sample_rate_hz`, its blocks sized for the prior's sliding
     /// oscillator `prior_omega` (rad/s), forgetting `forgetting` per row in (0, 1].
     pub fn new(sample_rate_hz: f64, prior_omega: f64, forgetting: f64) -> Result<Self, Error> {
-        check(
-            Param::SampleRate,
-            sample_rate_hz,
-            sample_rate_hz > 0.0 && sample_rate_hz.is_finite(),
-            "sample rate > 0 Hz",
-        )?;
+        check_sample_rate(sample_rate_hz)?;
         check(
             Param::NaturalFrequency,
             prior_omega,
             prior_omega > 0.0 && prior_omega.is_finite(),
             "sliding circular frequency > 0",
         )?;
-        check(
-            Param::Forgetting,
-            forgetting,
-            forgetting > 0.0 && forgetting <= 1.0,
-            "forgetting factor in (0, 1]",
-        )?;
+        check_forgetting(forgetting)?;
         let d =
             libm::floor(OMEGA_H * sample_rate_hz / prior_omega).clamp(1.0, MAX_DECIMATION as f64);
         Ok(Self {

@@ -211,6 +211,7 @@ fn late_rms(csv: &[u8], from_s: f64) -> f64 {
         let v: Vec<&str> = line.split(',').collect();
         let num = |i: usize| v[i].parse::<f64>().unwrap();
         let truth = num(y);
+        assert!(truth.is_finite());
         peak = peak.max(truth.abs());
         if num(t) >= from_s {
             let e = num(p) - truth;

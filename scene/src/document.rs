@@ -136,14 +136,7 @@ impl ParseContext<'_> {
             )?),
             None => None,
         };
-        let gravity = self.gravity(raw)?;
-        let (structure, mu_s, friction) = self.structure(
-            structure_table,
-            raw.friction.as_ref(),
-            gravity,
-            &raw.gravity_m_s2,
-        )?;
-        let prior = self.estimator(raw.estimator.as_ref(), &structure, mu_s, friction)?;
+        let (structure, mu_s, friction, prior) = self.specimen(raw, structure_table)?;
         let rate_v = &sampling.get_ref().rate_hz;
         let rate = self.check(
             Some("sampling"),
@@ -190,6 +183,24 @@ impl ParseContext<'_> {
             board,
             recording: None,
         })
+    }
+
+    /// The specimen and what the controller is told of it: `gravity_m_s2`, `[structure]` (with
+    /// `[friction]`) and `[estimator]`, in that order (simulated and replay scenes alike).
+    fn specimen(
+        &self,
+        raw: &RawScene,
+        structure_table: &Spanned<RawStructure>,
+    ) -> Result<(Structure, f64, FrictionLaw, Prior), SceneError> {
+        let gravity = self.gravity(raw)?;
+        let (structure, mu_s, friction) = self.structure(
+            structure_table,
+            raw.friction.as_ref(),
+            gravity,
+            &raw.gravity_m_s2,
+        )?;
+        let prior = self.estimator(raw.estimator.as_ref(), &structure, mu_s, friction)?;
+        Ok((structure, mu_s, friction, prior))
     }
 
     /// `gravity_m_s2` (> 0), or standard gravity.
@@ -251,14 +262,7 @@ impl ParseContext<'_> {
                 ));
             }
         }
-        let gravity = self.gravity(raw)?;
-        let (structure, mu_s, friction) = self.structure(
-            structure_table,
-            raw.friction.as_ref(),
-            gravity,
-            &raw.gravity_m_s2,
-        )?;
-        let prior = self.estimator(raw.estimator.as_ref(), &structure, mu_s, friction)?;
+        let (structure, mu_s, friction, prior) = self.specimen(raw, structure_table)?;
         let recording = self.recording(recording_table)?;
         let sensors = self.sensors_or_default(raw.sensors.as_ref())?;
         let rate_hz = match recording.time {

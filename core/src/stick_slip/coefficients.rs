@@ -2,7 +2,7 @@
 //! in f64 and rounded, and their bits (restored by a firmware image without f64 start-up code).
 
 use crate::closed_form::free_vibration::Kernel;
-use crate::error::{Error, Param};
+use crate::error::Error;
 use crate::math::Real;
 use crate::structure::{Regime, Structure};
 
@@ -38,12 +38,7 @@ pub struct StickSlipCoefficients<T> {
 impl<T: Real> StickSlipCoefficients<T> {
     /// The coefficients of `structure` sampled at `sample_rate_hz` (computed in f64).
     pub fn new(structure: &Structure, sample_rate_hz: f64) -> Result<Self, Error> {
-        crate::error::check(
-            Param::SampleRate,
-            sample_rate_hz,
-            sample_rate_hz > 0.0,
-            "sample rate > 0 Hz",
-        )?;
+        crate::error::check_sample_rate(sample_rate_hz)?;
         let dt = 1.0 / sample_rate_hz;
         let (p, xi, m) = (structure.p(), structure.xi(), structure.mass_ratio());
         let ks64 = Kernel::<f64>::new(structure);

@@ -161,12 +161,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
         cfg: StickSlipConfig,
         history: usize,
     ) -> Result<Self, Error> {
-        crate::error::check(
-            Param::Forgetting,
-            cfg.forgetting,
-            cfg.forgetting > 0.0 && cfg.forgetting <= 1.0,
-            "forgetting factor in (0, 1]",
-        )?;
+        crate::error::check_forgetting(cfg.forgetting)?;
         if cfg.identify_every == 0 || cfg.identify_every > MAX_IDENTIFY_EVERY {
             return Err(Error::OutOfRange {
                 param: Param::IdentifyEvery,
