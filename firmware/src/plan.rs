@@ -68,6 +68,7 @@ pub fn detector(plan: &Plan) -> Result<Detector, PlanFault> {
 pub fn pipeline(plan: &Plan, source: EventSource) -> Result<ImagePipeline, PlanFault> {
     Ok(
         Pipeline::new(model(plan)?, detector(plan)?, source, plan.disp_range_m())
-            .with_rest(plan.rest_samples),
+            .with_rest(plan.rest_samples)
+            .with_table_gain(plan.specimen.sample_rate_hz as f32),
     )
 }

@@ -7,6 +7,7 @@
 use crate::scene::Scene;
 use crate::sensors::{SensorFrame, FLAG_ACCEL_SATURATED, FLAG_DISP_SATURATED, FLAG_MISSING};
 use anyhow::{anyhow, bail, Result};
+use ssvr_proto::pipeline::model_inputs;
 use ssvr_proto::plan::MAX_HISTORY;
 use ssvr_proto::{
     flags, AccelerationDetector, DetectorPlan, DisplacementDetector, EventDetector, EventSource,
@@ -67,7 +68,9 @@ fn with_model<D: EventDetector + 'static>(plan: &Plan, opts: Options) -> Result<
     let m = model(plan, opts)?;
     let d = D::from_plan(plan).map_err(|e| anyhow!("detector: {e}"))?;
     Ok(Box::new(
-        Pipeline::new(m, d, opts.source, plan.disp_range_m()).with_rest(plan.rest_samples),
+        Pipeline::new(m, d, opts.source, plan.disp_range_m())
+            .with_rest(plan.rest_samples)
+            .with_table_gain(plan.specimen.sample_rate_hz as f32),
     ))
 }
 
@@ -171,21 +174,28 @@ pub fn model_step(
     Ok((frame.prediction, used))
 }
 
-/// A tracker of the base accelerometer's offset and gain as the pipeline removes them: the plan's
-/// slip-acceleration detector (the same code and ring) fed each sample's zeroed channels and
-/// flags, returning its offset and gain mismatch after the sample (0 for a displacement
-/// detector). The f64 reference of `host-sim qemu` reads the base the way the model does with
-/// it (`ssvr_proto::pipeline::base_in_table_units`).
-pub type OffsetTracker = Box<dyn FnMut(&[f32; ssvr_proto::CHANNELS], u8) -> (f32, f32)>;
+/// The pipeline's preparation of a sample's zeroed channels for its model, run apart from the
+/// pipeline: the plan's detector (the same code and ring) fed each sample's channels and flags,
+/// the base read in the table's units and the accelerometers divided by the table's gain
+/// identified against the displacement ([`ssvr_proto::pipeline::model_inputs`]). The f64 reference of `host-sim qemu` reads its
+/// inputs through it.
+pub type InputTracker = Box<dyn FnMut(&mut [f32; ssvr_proto::CHANNELS], u8)>;
 
-/// [`OffsetTracker`] of a plan.
-pub fn base_offset_tracker(plan: &Plan) -> Result<OffsetTracker> {
-    fn make<D: EventDetector + 'static>(plan: &Plan) -> Result<OffsetTracker> {
+/// [`InputTracker`] of a plan.
+pub fn input_tracker(plan: &Plan) -> Result<InputTracker> {
+    fn make<D: EventDetector + 'static>(plan: &Plan) -> Result<InputTracker> {
         let mut d = D::from_plan(plan).map_err(|e| anyhow!("detector: {e}"))?;
+        let mut gain = ssvr_proto::table_gain::TableGain::new(
+            plan.specimen.sample_rate_hz as f32,
+            d.max_age_samples(),
+        );
+        let mut index = 0u32;
         Ok(Box::new(move |ch, f| {
             let table = ch[ssvr_proto::Channel::TableAccel.index()];
-            let _ = d.process_with_reference(D::INPUT.of(ch, f), table);
-            (d.offset(), d.gain_mismatch())
+            let event = d.process_with_reference(D::INPUT.of(ch, f), table);
+            let tracked = (d.offset(), d.gain_mismatch());
+            model_inputs(ch, f, tracked, Some(&mut gain), index, event.as_ref());
+            index = index.wrapping_add(1);
         }))
     }
     macro_rules! rings {
@@ -197,7 +207,7 @@ pub fn base_offset_tracker(plan: &Plan) -> Result<OffsetTracker> {
         };
     }
     match plan.detector {
-        DetectorPlan::Displacement(_) => Ok(Box::new(|_, _| (0.0, 0.0))),
+        DetectorPlan::Displacement(_) => rings!(DisplacementDetector, 8 16 32 64 128 256 512 1024),
         DetectorPlan::SlipAcceleration(_) => {
             rings!(AccelerationDetector, 8 16 32 64 128 256 512 1024)
         }

@@ -9,7 +9,8 @@
 //!   history sizes, stick-slip settings and coefficients), as words the firmware's build embeds;
 //! * [`model`] and [`detector`]: the estimator models and friction-event detectors behind two
 //!   small traits;
-//! * [`zeroing`]: the accelerometers' offsets from the rest before the input;
+//! * [`zeroing`]: the accelerometers' offsets from the rest before the input; [`table_gain`]: the
+//!   table accelerometer's gain against the displacement sensor;
 //! * [`pipeline`]: **the** per-sample step (flags → detector → events → model), run by the
 //!   firmware, by `host-sim qemu`'s check and by `host-sim run`;
 //! * [`stream`]: the defmt messages a frame, the counters and the plan are streamed as (feature
@@ -36,6 +37,7 @@ pub mod model;
 pub mod pipeline;
 pub mod plan;
 pub mod stream;
+pub mod table_gain;
 pub mod zeroing;
 
 pub use channel::{Channel, CHANNELS};

@@ -27,6 +27,7 @@ use crate::event::{Event, EventKind};
 use crate::flags;
 use crate::frame::{Frame, Sample};
 use crate::model::{Model, Pushed};
+use crate::table_gain::{GainEstimate, TableGain};
 use crate::zeroing::Zeroing;
 use ssvr_core::stick_slip::MuEstimate;
 
@@ -39,13 +40,47 @@ const _: () = assert!(
     "events of a batch are a u32 mask"
 );
 
-/// The base accelerometer's sample `base` in the table accelerometer's units: less the
-/// `offset` of the slip acceleration, divided by 1 + the gain mismatch `k` (the base's gain
-/// relative to the table's, minus 1) that the detector tracks. The pipeline and the host's f64
-/// reference use this one function.
+/// A sample's zeroed `channels` (flags `f`) as the model reads them, the one preparation the
+/// pipeline and the host's f64 reference share:
+///
+/// 1. the base is read in the table accelerometer's units: less the `offset` of the slip
+///    acceleration, divided by 1 + the gain mismatch `k` (the base's gain relative to the
+///    table's, minus 1) that the detector tracks;
+/// 2. the table accelerometer's gain identification ([`TableGain::push`], when there is one)
+///    takes the base less the table, the displacement (unless the flags say they are unusable)
+///    and the detector's `event`;
+/// 3. the three accelerometers are divided by the table's adopted gain.
 #[inline(always)]
-pub fn base_in_table_units(base: f32, offset: f32, k: f32) -> f32 {
-    (base - offset) / (1.0 + k)
+pub fn model_inputs(
+    channels: &mut [f32; crate::CHANNELS],
+    f: u8,
+    (offset, k): (f32, f32),
+    gain: Option<&mut TableGain>,
+    index: u32,
+    event: Option<&ssvr_core::detect::displacement::SlipEvent>,
+) {
+    let table = channels[Channel::TableAccel.index()];
+    let base = &mut channels[Channel::BaseAccel.index()];
+    *base = (*base - offset) / (1.0 + k);
+    let base = *base;
+    let Some(gain) = gain else {
+        return;
+    };
+    let a = if f & (flags::MISSING | flags::NOT_FINITE | flags::SATURATED) == 0 {
+        base - table
+    } else {
+        f32::NAN
+    };
+    let s = if f & flags::DISP_INVALID == 0 {
+        channels[Channel::Displacement.index()]
+    } else {
+        f32::NAN
+    };
+    gain.push(index, a, s, event);
+    let inv = gain.inverse();
+    for c in [Channel::TableAccel, Channel::BaseAccel, Channel::TopAccel] {
+        channels[c.index()] *= inv;
+    }
 }
 
 /// Where the model's friction events come from.
@@ -88,6 +123,7 @@ pub struct Pipeline<M, D> {
     disp_range_m: f32,
     index: u32,
     zeroing: Zeroing,
+    gain: Option<TableGain>,
     /// Counters.
     pub stats: Stats,
 }
@@ -102,8 +138,21 @@ impl<M: Model, D: EventDetector> Pipeline<M, D> {
             disp_range_m,
             index: 0,
             zeroing: Zeroing::new(0),
+            gain: None,
             stats: Stats::default(),
         }
+    }
+
+    /// Identify the table accelerometer's gain against the displacement sensor ([`TableGain`],
+    /// samples at `rate_hz`) and give the model every accelerometer divided by it.
+    pub fn with_table_gain(mut self, rate_hz: f32) -> Self {
+        self.gain = Some(TableGain::new(rate_hz, self.detector.max_age_samples()));
+        self
+    }
+
+    /// The table accelerometer's gain (1 + e) identified against the displacement sensor.
+    pub fn table_gain(&self) -> Option<GainEstimate> {
+        self.gain.as_ref().and_then(TableGain::estimate)
     }
 
     /// Zero the accelerometers on a rest of `rest_samples` samples before the input
@@ -196,8 +245,14 @@ impl<M: Model, D: EventDetector> Pipeline<M, D> {
         // The base accelerometer's offset and gain against the table's, tracked by the detector
         // while the base sticks: the models read the base corrected by them (in the table
         // accelerometer's units).
-        let base = &mut channels[Channel::BaseAccel.index()];
-        *base = base_in_table_units(*base, self.detector.offset(), self.detector.gain_mismatch());
+        model_inputs(
+            &mut channels,
+            f,
+            (self.detector.offset(), self.detector.gain_mismatch()),
+            self.gain.as_mut(),
+            self.index,
+            detected.as_ref(),
+        );
         let event = match self.source {
             EventSource::Detector => detected.as_ref().map(Event::from_detector),
             EventSource::Log => s.reversal.map(|r| Event {
@@ -269,6 +324,8 @@ pub trait Step {
     fn max_age_samples(&self) -> usize;
     /// [`Pipeline::offsets`].
     fn offsets(&self) -> [f32; 3];
+    /// [`Pipeline::table_gain`].
+    fn table_gain(&self) -> Option<GainEstimate>;
     /// [`Pipeline::model_offsets`].
     fn model_offsets(&self) -> [f32; 3];
     /// The model's identified and adopted f and ξ ([`Model::oscillator`]).
@@ -306,6 +363,9 @@ impl<M: Model, D: EventDetector> Step for Pipeline<M, D> {
     }
     fn offsets(&self) -> [f32; 3] {
         Pipeline::offsets(self)
+    }
+    fn table_gain(&self) -> Option<GainEstimate> {
+        Pipeline::table_gain(self)
     }
     fn oscillator(&self) -> Option<crate::model::OscillatorReport> {
         self.model.oscillator()

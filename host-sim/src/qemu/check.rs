@@ -67,12 +67,15 @@ pub fn instructions_goal(model: Model) -> f64 {
         Model::StickSlip | Model::FixedBase => GOAL_INSTRUCTIONS_PER_SAMPLE_STICK_SLIP,
     }
 }
-/// Goal: board image flash (bytes): 64 KiB of the STM32F446RE's 512 KiB. It was 32 KiB
+/// Goal: board image flash (bytes): 96 KiB of the STM32F446RE's 512 KiB. It was 32 KiB
 /// ([`BOARD_FLASH_32K`], still reported) until the fuse mode's online identification of f and
 /// ξ, whose adoption re-derives the estimator's coefficients in f64 on the device (~15 KB of
 /// soft-float and libm code: the stick-slip board image went from 32 600 B to 47 336 B), and
-/// the sliding observer and gain tracking (50 288 B).
-pub const GOAL_BOARD_FLASH_BYTES: u64 = 64 * 1024;
+/// the sliding observer and gain tracking (50 288 B); then 64 KiB until the identification
+/// from the sliding phases (65 040 B) and the table accelerometer's gain against the
+/// displacement sensor (67 496 B). A fifth of the flash leaves the board room for its logging
+/// and transport code.
+pub const GOAL_BOARD_FLASH_BYTES: u64 = 96 * 1024;
 /// The board image's former flash budget (bytes), reported as `board_flash_le_32k`.
 pub const BOARD_FLASH_32K: u64 = 32 * 1024;
 /// Goal: board image static RAM, `.data` + `.bss` (+ `.uninit`), bytes.

@@ -104,8 +104,9 @@ pub enum Reference {
         /// f64 estimator's friction per sample, so the reference measures the estimator's
         /// arithmetic.
         friction: Option<Box<SlipFriction>>,
-        /// The base offset the pipeline removes (its detector's), for the friction's slip speed.
-        base_offset: crate::pipeline::OffsetTracker,
+        /// The pipeline's preparation of the inputs (the base's offset and gain against the
+        /// table, the table's gain against the displacement).
+        inputs: crate::pipeline::InputTracker,
         /// Predict mode (the top accelerometer is not read).
         predict: bool,
         /// Predict mode's tuning from the base accelerometer: the firmware's own code (f32)
@@ -151,7 +152,7 @@ impl Reference {
                 } else {
                     None
                 },
-                base_offset: crate::pipeline::base_offset_tracker(plan)?,
+                inputs: crate::pipeline::input_tracker(plan)?,
                 predict: plan.mode == Mode::Predict,
                 base_tuning: if plan.model == Model::StickSlip && !plan.follows_law() {
                     <Option<BaseTuning> as BaseSlot>::of_plan(plan).map(Box::new)
@@ -189,16 +190,14 @@ impl Reference {
                 level_changes,
                 out_of_order,
                 friction,
-                base_offset,
+                inputs,
                 predict,
                 base_tuning,
                 prior,
             } => {
                 let mut channels = s.channels;
                 zeroing.apply(k as u32, &mut channels, f.flags);
-                let (off, gain) = base_offset(&channels, f.flags);
-                let base = &mut channels[ssvr_proto::Channel::BaseAccel.index()];
-                *base = ssvr_proto::pipeline::base_in_table_units(*base, off, gain);
+                inputs(&mut channels, f.flags);
                 if let Some(e) = f.event.filter(|_| f.flags & flags::EVENT_PUSHED != 0) {
                     let phase = if e.is_stick() { 0 } else { e.level };
                     if let Some(fr) = friction.as_mut() {

@@ -281,7 +281,6 @@ pub fn replay<W: Write>(
     flushed?;
 
     let top = rdr.present()[Channel::TopAccel.index()];
-    let mu = pipe.mu_estimate();
     let count = |k: &str| state.kinds.iter().filter(|n| **n == k).count();
     let report = ReplayReport {
         scene: scene.name.clone(),
@@ -301,15 +300,7 @@ pub fn replay<W: Write>(
         model: model.name(),
         mode: mode.name(),
         model_reason,
-        identified: Identified::of(
-            &plan,
-            mu.map(|m| m.mu),
-            pipe.oscillator(),
-            pipe.static_friction(),
-            crate::run::sum(pipe.offsets(), pipe.model_offsets()),
-            (model == Model::StickSlip).then(|| pipe.gain_mismatch()),
-            pipe.friction_law(),
-        ),
+        identified: Identified::of(&plan, &*pipe, model == Model::StickSlip),
         events: EventCounts {
             slip_starts: count("slip_start"),
             reversals: count("reversal"),

@@ -101,6 +101,25 @@ pub struct Identified {
     /// none, i.e. Coulomb friction).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub friction: Option<FrictionLawJson>,
+    /// The table accelerometer's gain error identified against the displacement sensor over
+    /// the sliding episodes (absent: fewer than three episodes).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub table_gain_error: Option<TableGainJson>,
+}
+
+/// `estimator.identified.table_gain_error`: the table accelerometer's gain error e (measured =
+/// (1 + e)·true) against the displacement sensor; every accelerometer is divided by 1 + the one
+/// in use.
+#[derive(Debug, Clone, Serialize)]
+pub struct TableGainJson {
+    /// The estimate of e.
+    pub estimate: f64,
+    /// Its standard deviation.
+    pub std: f64,
+    /// Sliding episodes it rests on.
+    pub episodes: u32,
+    /// The e in use at the end (0 until an adoption).
+    pub in_use: f64,
 }
 
 /// `estimator.identified.friction`: the law μ(v) = mu_fast − (mu_fast − mu_slow)·e^{−rate_s_m·|v|}
@@ -151,16 +170,14 @@ pub struct InUse {
 }
 
 impl Identified {
-    /// From the plan (the prior), the identified μ, f and ξ and the pipeline's offsets.
-    pub fn of(
-        plan: &ssvr_proto::Plan,
-        mu: Option<f64>,
-        oscillator: Option<ssvr_proto::model::OscillatorReport>,
-        static_friction: Option<ssvr_proto::StaticFriction>,
-        offsets: [f32; 3],
-        gain_mismatch: Option<f32>,
-        friction: Option<ssvr_proto::model::FrictionReport>,
-    ) -> Self {
+    /// From the plan (the prior) and what the pipeline identified by the end of the run (the
+    /// base's gain against the table's only for the stick-slip model, `stick_slip`).
+    pub fn of(plan: &ssvr_proto::Plan, pipe: &dyn ssvr_proto::Step, stick_slip: bool) -> Self {
+        let mu = pipe.mu_estimate().map(|m| m.mu);
+        let oscillator = pipe.oscillator();
+        let static_friction = pipe.static_friction();
+        let offsets = crate::run::sum(pipe.offsets(), pipe.model_offsets());
+        let gain_mismatch = stick_slip.then(|| pipe.gain_mismatch());
         let p = &plan.specimen.structure;
         let est = oscillator.and_then(|o| o.estimate);
         Self {
@@ -180,7 +197,13 @@ impl Identified {
             static_friction_coefficient_std: static_friction.map(|s| s.std),
             static_friction_slip_starts: static_friction.map(|s| s.slip_starts),
             base_vs_table_gain_error: gain_mismatch.map(f64::from),
-            friction: friction.map(FrictionLawJson::from),
+            friction: pipe.friction_law().map(FrictionLawJson::from),
+            table_gain_error: pipe.table_gain().map(|g| TableGainJson {
+                estimate: g.gain - 1.0,
+                std: g.sigma,
+                episodes: g.episodes,
+                in_use: f64::from(g.in_use) - 1.0,
+            }),
         }
     }
 }
