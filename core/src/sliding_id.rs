@@ -64,6 +64,11 @@ pub struct SlidingEstimate {
     pub offset_std: f64,
     /// Rows (block triples) used, with forgetting.
     pub rows: f64,
+    /// 0, or the direction s (±1) of the only sliding seen when the offset is not known: the
+    /// friction and the offset are then one constant, and `friction_accel` is the friction
+    /// acceleration of that direction with the offset in it, μ·g + s·b (`offset` 0). It is what
+    /// the base's mean acceleration is while it slides that way.
+    pub one_way: i8,
 }
 
 /// Identifies the sliding oscillator and the friction from the base acceleration (see the
@@ -83,6 +88,8 @@ pub struct SlidingIdentifier<T> {
     normal: PagedNormal<T, 4, 15>,
     /// Block duration (s).
     h: f64,
+    /// The directions with rows: bit 0 s = +1, bit 1 s = −1.
+    directions: u8,
 }
 
 impl<T: Real> SlidingIdentifier<T> {
@@ -109,6 +116,7 @@ impl<T: Real> SlidingIdentifier<T> {
             prev_n: 0,
             normal: PagedNormal::new(forgetting),
             h: d / sample_rate_hz,
+            directions: 0,
         })
     }
 
@@ -178,6 +186,7 @@ impl<T: Real> SlidingIdentifier<T> {
         if self.prev_n >= 2 {
             let [y1, y2] = self.prev;
             let s = if self.level > 0 { T::ONE } else { -T::ONE };
+            self.directions |= if self.level > 0 { 1 } else { 2 };
             let t = y - (y1 + y1) + y2;
             self.normal.add(&[y1, y1 - y2, s, T::ONE], t);
         }
@@ -189,16 +198,26 @@ impl<T: Real> SlidingIdentifier<T> {
     /// fit that is not an underdamped oscillator with a positive friction acceleration). Until
     /// the base has slid both ways the friction and the offset are one constant: with
     /// `offset_known` the offset is then taken as 0 (the accelerometers were zeroed on a rest),
-    /// without it there is no estimate.
+    /// without it the estimate is that direction's ([`SlidingEstimate::one_way`]).
     pub fn estimate(&self, offset_known: bool) -> Option<SlidingEstimate> {
         if self.normal.rows() < MIN_ROWS {
             return None;
         }
         // Both directions of sliding separate the friction from the offset; until then (one
         // direction: the last two regressors are equal up to sign) the offset is taken as 0.
-        let fit = match self.normal.solve::<4>() {
+        let one_way = match self.directions {
+            1 if !offset_known => 1,
+            2 if !offset_known => -1,
+            _ => 0,
+        };
+        let both = if one_way == 0 {
+            self.normal.solve::<4>()
+        } else {
+            None
+        };
+        let fit = match both {
             Some(f) => f,
-            None if !offset_known => return None,
+            None if !offset_known && one_way == 0 => return None,
             None => {
                 let f = self.normal.solve::<3>()?;
                 let mut cov = [[0.0; 4]; 4];
@@ -228,6 +247,7 @@ impl<T: Real> SlidingIdentifier<T> {
         let wd = acos(cos_wd)? / h;
         let omega = libm::sqrt(zw * zw + wd * wd);
         let zeta = zw / omega;
+        // (One way: γ·s is the whole constant, μ·g·s + b.)
         let friction_accel = gamma / alpha;
         if !(friction_accel > 0.0 && omega.is_finite()) {
             return None;
@@ -253,6 +273,7 @@ impl<T: Real> SlidingIdentifier<T> {
             offset: off,
             offset_std: libm::sqrt(libm::fmax(var_off, 0.0)),
             rows,
+            one_way,
         })
     }
 }

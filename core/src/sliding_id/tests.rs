@@ -104,6 +104,35 @@ fn noisy_f32_within_its_standard_deviations() {
     assert!(e.omega_std > 0.0 && e.friction_accel_std > 0.0);
 }
 
+/// One direction only, offset not known: the estimate is that direction's friction with the
+/// offset in it, μ·g + s·b (exact without noise), ω and ζ as from both; the other direction
+/// then separates them.
+#[test]
+fn one_way_gives_that_direction_s_level() {
+    let t = table1();
+    let mut id = SlidingIdentifier::<f64>::new(10_000.0, t.omega, 1.0).unwrap();
+    let samples = signal(&t, 10_000.0, 2, 0.0, 7);
+    let first_minus = samples.iter().position(|&(_, s)| s < 0).unwrap();
+    for &(y, s) in &samples[..first_minus] {
+        id.push(y, s);
+    }
+    let e = id.estimate(false).unwrap();
+    assert_eq!(e.one_way, 1);
+    assert!(rel(e.friction_accel, t.mu_g + t.offset) < 1e-8, "{e:?}");
+    assert!(rel(e.omega, t.omega) < 1e-9, "{e:?}");
+    assert!(rel(e.damping_ratio, t.zeta) < 1e-8, "{e:?}");
+    assert_eq!(e.offset, 0.0);
+    // A zeroed accelerometer: the offset is taken as 0, not a one-way estimate.
+    assert_eq!(id.estimate(true).unwrap().one_way, 0);
+    for &(y, s) in &samples[first_minus..] {
+        id.push(y, s);
+    }
+    let e = id.estimate(false).unwrap();
+    assert_eq!(e.one_way, 0);
+    assert!(rel(e.friction_accel, t.mu_g) < 1e-8, "{e:?}");
+    assert!((e.offset - t.offset).abs() < 1e-8, "{e:?}");
+}
+
 #[test]
 fn nothing_before_enough_rows_and_no_panic_on_bad_input() {
     let mut id = SlidingIdentifier::<f32>::new(10_000.0, 186.0, 0.9999).unwrap();

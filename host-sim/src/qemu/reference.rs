@@ -208,6 +208,9 @@ impl Reference {
                         }
                     }
                     if let Some(b) = base_tuning.as_mut() {
+                        if let Some(mu) = b.mu_at_event(phase) {
+                            est.set_friction(f64::from(mu));
+                        }
                         b.event(phase, e.age_samples);
                     }
                     let age = e.age_samples.min(*max_age);

@@ -97,6 +97,11 @@ pub struct BaseTuning {
     g: f32,
     prior_mu: f64,
     mu_use: f32,
+    /// The friction coefficient of each direction of the friction force (s = +1, −1) in use:
+    /// μ, or until the base has slid both ways without a rest, that direction's one-way
+    /// estimate (the offset in it), with its standard deviation.
+    mu_dir: [f32; 2],
+    mu_dir_std: [f64; 2],
     /// The standard deviation of the μ in use (0: the prior's, replaced only by a μ̂ that
     /// differs from it significantly).
     mu_std_use: f64,
@@ -179,6 +184,8 @@ impl BaseTuning {
             g: params.gravity_m_s2 as f32,
             prior_mu: params.friction_coefficient,
             mu_use: params.friction_coefficient as f32,
+            mu_dir: [params.friction_coefficient as f32; 2],
+            mu_dir_std: [0.0; 2],
             mu_std_use: 0.0,
             offset_std_use: 0.0,
             mu_adoptions: 0,
@@ -245,7 +252,27 @@ impl BaseTuning {
         if level == 0 {
             return f32::NAN;
         }
-        (1.0 + self.r) * self.mu_use * self.g * sign(level) - self.r * (base - self.offset)
+        (1.0 + self.r) * self.mu_for(level) * self.g * sign(level) - self.r * (base - self.offset)
+    }
+
+    /// Predict mode: the friction coefficient to set at an event into phase `level` (`None`
+    /// when stuck, and in fuse mode, whose μ comes from the top accelerometer).
+    #[inline(always)]
+    pub fn mu_at_event(&self, level: i8) -> Option<f32> {
+        (!self.fuse && level != 0).then(|| self.mu_for(level))
+    }
+
+    /// The friction coefficient in use for phase `level`: μ, or while only one direction has
+    /// slid without a rest, that direction's one-way estimate (the table offset in it: what the
+    /// model's stuck phases carry too, so the top's prediction is off by that offset alone
+    /// instead of by the prior's error in μ).
+    #[inline(always)]
+    pub fn mu_for(&self, level: i8) -> f32 {
+        match level {
+            1.. => self.mu_dir[0],
+            ..=-1 => self.mu_dir[1],
+            0 => self.mu_use,
+        }
     }
 
     /// The table (and base) accelerometer's offset in use (m/s²), to remove from the model's
@@ -379,6 +406,9 @@ impl BaseTuning {
         let Some(e) = estimate else {
             return (None, None);
         };
+        if e.one_way != 0 {
+            return self.adopt_one_way(&e);
+        }
         self.last = Some(e);
         let coefficients = if self.fuse {
             None
@@ -398,13 +428,48 @@ impl BaseTuning {
             && sd < MAX_REL_STD_MU * mu
             && change > MIN_REL_CHANGE_MU * mu
             && better;
-        let mu = adopt.then(|| {
+        if adopt {
             self.mu_use = mu as f32;
             self.mu_std_use = sd;
             self.mu_adoptions = self.mu_adoptions.saturating_add(1);
-            self.mu_use
-        });
-        (coefficients, mu)
+        }
+        // Both ways slid: one μ for both directions.
+        let one = [self.mu_use; 2];
+        let changed = adopt || (!self.fuse && self.mu_dir != one);
+        self.mu_dir = one;
+        (coefficients, changed.then(|| self.mu_for(self.level)))
+    }
+
+    /// Predict mode, the base slid one way only and no rest: f and ξ adopted as from both ways
+    /// (the oscillation does not depend on the constant), and that direction's friction level
+    /// adopted for it alone, like μ (when it differs significantly from the one in use or is
+    /// known twice as well).
+    fn adopt_one_way(
+        &mut self,
+        e: &SlidingEstimate,
+    ) -> (Option<StickSlipCoefficients<f32>>, Option<f32>) {
+        if self.fuse {
+            return (None, None);
+        }
+        let coefficients = self.adoption.adopt(&self.oscillator(e));
+        let i = if e.one_way > 0 { 0 } else { 1 };
+        let mu = e.friction_accel / self.g as f64;
+        let sd = e.friction_accel_std / self.g as f64;
+        let (Some(in_use), Some(std_use)) = (self.mu_dir.get(i), self.mu_dir_std.get(i)) else {
+            return (coefficients, None);
+        };
+        let change = libm::fabs(mu - *in_use as f64);
+        let adopt = mu > 0.5 * self.prior_mu
+            && mu < 2.0 * self.prior_mu
+            && sd < MAX_REL_STD_MU * mu
+            && change > MIN_REL_CHANGE_MU * mu
+            && (sd < 0.5 * std_use || change > 3.0 * sd);
+        if adopt {
+            if let (Some(m), Some(s)) = (self.mu_dir.get_mut(i), self.mu_dir_std.get_mut(i)) {
+                (*m, *s) = (mu as f32, sd);
+            }
+        }
+        (coefficients, adopt.then(|| self.mu_for(self.level)))
     }
 
     /// The table accelerometer's offset of the sliding base's fit `e`, adopted like μ (when it

@@ -172,6 +172,10 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot> Model
                 self.est.set_friction(f.since_slip_start());
             }
         }
+        // Predict mode without a rest: each direction's friction until both are known.
+        if let Some(mu) = self.base_tuning.get().and_then(|b| b.mu_at_event(phase)) {
+            self.est.set_friction(mu);
+        }
         if e.kind == EventKind::SlipStart && e.age_samples <= self.max_age {
             if let Some(mu) = self.est.breakaway_coefficient(e.age_samples, self.fuse) {
                 self.breakaways.push(mu);
