@@ -102,7 +102,7 @@ pub struct Identified {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub friction: Option<FrictionLawJson>,
     /// The table accelerometer's gain error identified against the displacement sensor over
-    /// the sliding episodes (absent: fewer than three episodes).
+    /// the sliding episodes (absent: fewer than eight episodes).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub table_gain_error: Option<TableGainJson>,
 }
