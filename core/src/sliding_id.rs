@@ -125,6 +125,12 @@ impl<T: Real> SlidingIdentifier<T> {
         self.decimation
     }
 
+    /// Whether rows of both directions of sliding are in (the friction and the offset then
+    /// separate).
+    pub fn both_ways(&self) -> bool {
+        self.directions == 3
+    }
+
     /// Rows ever added (wrapping): an estimate changes only when it does.
     pub fn rows_added(&self) -> u32 {
         self.normal.added()

@@ -12,10 +12,10 @@ pub mod generated {
     include!(concat!(env!("OUT_DIR"), "/plan.rs"));
 }
 
-pub use generated::{Detector, Model};
+pub use generated::{Detector, Gain, Model};
 
 /// The pipeline of the compiled-in model and detector.
-pub type ImagePipeline = Pipeline<Model, Detector>;
+pub type ImagePipeline = Pipeline<Model, Detector, Gain>;
 
 /// The compiled-in plan, restored from its words at compile time (a malformed word list or a
 /// digest that does not match fails the build, not the image).
@@ -66,6 +66,7 @@ pub fn detector(plan: &Plan) -> Result<Detector, PlanFault> {
 
 /// The pipeline of the plan at sample 0, its events from `source`.
 pub fn pipeline(plan: &Plan, source: EventSource) -> Result<ImagePipeline, PlanFault> {
+    // (`Gain` is `()` when the plan does not identify the table's gain: a no-op then.)
     Ok(
         Pipeline::new(model(plan)?, detector(plan)?, source, plan.disp_range_m())
             .with_rest(plan.rest_samples)

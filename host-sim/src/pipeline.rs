@@ -67,11 +67,13 @@ impl Default for Options {
 fn with_model<D: EventDetector + 'static>(plan: &Plan, opts: Options) -> Result<Box<dyn Step>> {
     let m = model(plan, opts)?;
     let d = D::from_plan(plan).map_err(|e| anyhow!("detector: {e}"))?;
-    Ok(Box::new(
-        Pipeline::new(m, d, opts.source, plan.disp_range_m())
-            .with_rest(plan.rest_samples)
-            .with_table_gain(plan.specimen.sample_rate_hz as f32),
-    ))
+    let p: Pipeline<_, _> =
+        Pipeline::new(m, d, opts.source, plan.disp_range_m()).with_rest(plan.rest_samples);
+    Ok(if plan.identifies_table_gain() {
+        Box::new(p.with_table_gain(plan.specimen.sample_rate_hz as f32))
+    } else {
+        Box::new(p)
+    })
 }
 
 /// The pipeline of a plan at sample 0: the firmware's model and detector types (the stick-slip
@@ -185,16 +187,18 @@ pub type InputTracker = Box<dyn FnMut(&mut [f32; ssvr_proto::CHANNELS], u8)>;
 pub fn input_tracker(plan: &Plan) -> Result<InputTracker> {
     fn make<D: EventDetector + 'static>(plan: &Plan) -> Result<InputTracker> {
         let mut d = D::from_plan(plan).map_err(|e| anyhow!("detector: {e}"))?;
-        let mut gain = ssvr_proto::table_gain::TableGain::new(
-            plan.specimen.sample_rate_hz as f32,
-            d.max_age_samples(),
-        );
+        let mut gain = plan.identifies_table_gain().then(|| {
+            ssvr_proto::table_gain::TableGain::new(
+                plan.specimen.sample_rate_hz as f32,
+                d.max_age_samples(),
+            )
+        });
         let mut index = 0u32;
         Ok(Box::new(move |ch, f| {
             let table = ch[ssvr_proto::Channel::TableAccel.index()];
             let event = d.process_with_reference(D::INPUT.of(ch, f), table);
             let tracked = (d.offset(), d.gain_mismatch());
-            model_inputs(ch, f, tracked, Some(&mut gain), index, event.as_ref());
+            model_inputs(ch, f, tracked, gain.as_mut(), index, event.as_ref());
             index = index.wrapping_add(1);
         }))
     }

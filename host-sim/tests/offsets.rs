@@ -108,11 +108,12 @@ fn a_gain_mismatch_is_tracked() {
 
 /// The table accelerometer's own gain, against the displacement sensor over the sliding
 /// episodes (`ssvr_proto::table_gain`), on 10 s of the default scene (139 episodes): with every
-/// accelerometer's gain off by ±1 % (the table's by `e`), e is found within 1.5e-4 and adopted,
+/// accelerometer's gain off by ±1 % (the table's by `e`), e is found within 1.5e-4 and adopted
+/// (the one in use within 1e-3, the smallest change re-adopted),
 /// so μ comes out within 1e-3 and the fuse mode's error is back under its goal. Measured (each
-/// estimate ~1.0e-4 low, within 1.2σ): e = +1 %: 0.009894 ± 8.9e-5, μ 0.19997, 0.164 % RMS
-/// (0.65 % before); e = −1 %: −0.010104 ± 8.7e-5, μ 0.19995, 0.161 % RMS. Without a gain
-/// error: −1.05e-4 ± 8.8e-5, not adopted.
+/// estimate ~6e-5 low, within 0.8σ): e = +1 %: 0.009942 ± 8.2e-5 (in use 0.009656), μ 0.20003,
+/// 0.164 % RMS (0.65 % before); e = −1 %: −0.010057 ± 8.0e-5 (in use −0.010331), μ 0.20000,
+/// 0.162 % RMS. Without a gain error: −5.7e-5 ± 8.1e-5, not adopted.
 #[test]
 fn the_table_gain_is_found_against_the_displacement() {
     for e in [0.01, -0.01, 0.0] {
@@ -132,7 +133,8 @@ fn the_table_gain_is_found_against_the_displacement() {
         if e == 0.0 {
             assert_eq!(g.in_use, 0.0);
         } else {
-            assert!((g.in_use - e).abs() < 1.5e-4, "{e}: {g:?}");
+            // (Adopted early, within 3σ of 2e-3; re-adopted only beyond 1e-3: measured 3e-4.)
+            assert!((g.in_use - e).abs() < 1e-3, "{e}: {g:?}");
         }
         let mu = est.mu_estimate.unwrap();
         assert!((mu / 0.2 - 1.0).abs() < 1e-3, "{e}: {mu}");

@@ -27,7 +27,7 @@ use crate::event::{Event, EventKind};
 use crate::flags;
 use crate::frame::{Frame, Sample};
 use crate::model::{Model, Pushed};
-use crate::table_gain::{GainEstimate, TableGain};
+use crate::table_gain::{GainEstimate, GainSlot, TableGain};
 use crate::zeroing::Zeroing;
 use ssvr_core::stick_slip::MuEstimate;
 
@@ -59,13 +59,24 @@ pub fn model_inputs(
     index: u32,
     event: Option<&ssvr_core::detect::displacement::SlipEvent>,
 ) {
-    let table = channels[Channel::TableAccel.index()];
     let base = &mut channels[Channel::BaseAccel.index()];
     *base = (*base - offset) / (1.0 + k);
-    let base = *base;
-    let Some(gain) = gain else {
-        return;
-    };
+    if let Some(gain) = gain {
+        table_gain_step(gain, channels, f, index, event);
+    }
+}
+
+/// Steps 2–3 of [`model_inputs`].
+#[inline(always)]
+fn table_gain_step(
+    gain: &mut TableGain,
+    channels: &mut [f32; crate::CHANNELS],
+    f: u8,
+    index: u32,
+    event: Option<&ssvr_core::detect::displacement::SlipEvent>,
+) {
+    let table = channels[Channel::TableAccel.index()];
+    let base = channels[Channel::BaseAccel.index()];
     let a = if f & (flags::MISSING | flags::NOT_FINITE | flags::SATURATED) == 0 {
         base - table
     } else {
@@ -78,9 +89,13 @@ pub fn model_inputs(
     };
     gain.push(index, a, s, event);
     let inv = gain.inverse();
-    for c in [Channel::TableAccel, Channel::BaseAccel, Channel::TopAccel] {
-        channels[c.index()] *= inv;
-    }
+    const _: () = assert!(
+        Channel::TableAccel.index() == 0
+            && Channel::BaseAccel.index() == 1
+            && Channel::TopAccel.index() == 2
+    );
+    let [table, base, top, _] = channels;
+    (*table, *base, *top) = (*table * inv, *base * inv, *top * inv);
 }
 
 /// Where the model's friction events come from.
@@ -116,19 +131,19 @@ pub struct Stats {
 
 /// The detector, the model and the sample clock.
 #[derive(Debug, Clone)]
-pub struct Pipeline<M, D> {
+pub struct Pipeline<M, D, G = Option<TableGain>> {
     model: M,
     detector: D,
     source: EventSource,
     disp_range_m: f32,
     index: u32,
     zeroing: Zeroing,
-    gain: Option<TableGain>,
+    gain: G,
     /// Counters.
     pub stats: Stats,
 }
 
-impl<M: Model, D: EventDetector> Pipeline<M, D> {
+impl<M: Model, D: EventDetector, G: GainSlot> Pipeline<M, D, G> {
     /// Start at sample 0; a displacement at or beyond ±`disp_range_m` is unusable.
     pub fn new(model: M, detector: D, source: EventSource, disp_range_m: f32) -> Self {
         Self {
@@ -138,21 +153,22 @@ impl<M: Model, D: EventDetector> Pipeline<M, D> {
             disp_range_m,
             index: 0,
             zeroing: Zeroing::new(0),
-            gain: None,
+            gain: G::none(),
             stats: Stats::default(),
         }
     }
 
     /// Identify the table accelerometer's gain against the displacement sensor ([`TableGain`],
-    /// samples at `rate_hz`) and give the model every accelerometer divided by it.
+    /// samples at `rate_hz`) and give the model every accelerometer divided by it (nothing with
+    /// the slot `G = ()`: [`GainSlot`]).
     pub fn with_table_gain(mut self, rate_hz: f32) -> Self {
-        self.gain = Some(TableGain::new(rate_hz, self.detector.max_age_samples()));
+        self.gain = G::of(TableGain::new(rate_hz, self.detector.max_age_samples()));
         self
     }
 
     /// The table accelerometer's gain (1 + e) identified against the displacement sensor.
     pub fn table_gain(&self) -> Option<GainEstimate> {
-        self.gain.as_ref().and_then(TableGain::estimate)
+        self.gain.get().and_then(TableGain::estimate)
     }
 
     /// Zero the accelerometers on a rest of `rest_samples` samples before the input
@@ -249,7 +265,7 @@ impl<M: Model, D: EventDetector> Pipeline<M, D> {
             &mut channels,
             f,
             (self.detector.offset(), self.detector.gain_mismatch()),
-            self.gain.as_mut(),
+            self.gain.get_mut(),
             self.index,
             detected.as_ref(),
         );
@@ -339,7 +355,7 @@ pub trait Step {
     fn friction_law(&self) -> Option<crate::model::FrictionReport>;
 }
 
-impl<M: Model, D: EventDetector> Step for Pipeline<M, D> {
+impl<M: Model, D: EventDetector, G: GainSlot> Step for Pipeline<M, D, G> {
     fn step_batch(&mut self, samples: &[Sample], frames: &mut [Frame]) -> usize {
         Pipeline::step_batch(self, samples, frames)
     }

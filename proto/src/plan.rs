@@ -206,6 +206,13 @@ impl Plan {
         self
     }
 
+    /// Whether the pipeline identifies the table accelerometer's gain against the displacement
+    /// sensor ([`crate::table_gain`]): for the models of a base that slides (the fixed-base
+    /// model's never does, and the 8 KiB of its board's RAM have no room for it).
+    pub fn identifies_table_gain(&self) -> bool {
+        self.model != ModelKind::FixedBase
+    }
+
     /// Whether the stick-slip model follows a velocity-dependent friction law: the specimen has
     /// one with μ_slow < μ_fast (the firmware's build, the host's pipeline and the f64 reference
     /// all decide by this).

@@ -28,25 +28,32 @@
 //!
 //! The detector's events arrive late (a slip start up to its longest back-dating after the
 //! fact), so two integrators are restarted in turn while the base sticks, every `H` > longest
-//! back-dating samples: when a slip start arrives, the one restarted before the slip began (and
+//! back-dating samples (at the ends of blocks of 8 samples, which the samples are summed over
+//! first): when a slip start arrives, the one restarted before the slip began (and
 //! at most 2H samples before it) carries the episode; the next stick closes it.
 //!
 //! An estimate is adopted ([`TableGain::scale`]) once eight episodes give a standard deviation
-//! below [`ADOPT_SIGMA`], and again whenever it moves by more than 3σ; an estimate more than
-//! [`MAX_ERROR`] from 1 is never adopted (a displacement sensor off scale is not an accelerometer
-//! fault).
+//! below [`ADOPT_SIGMA`], and again whenever it moves by more than 3σ and [`MIN_CHANGE`]; an
+//! estimate more than [`MAX_ERROR`] from 1 is never adopted (a displacement sensor off scale is
+//! not an accelerometer fault).
 
 use ssvr_core::detect::displacement::SlipEvent;
 use ssvr_core::least_squares::PagedNormal;
 
 /// Adopt an estimate of 1 + e once its standard deviation is below this.
-pub const ADOPT_SIGMA: f64 = 1e-3;
+pub const ADOPT_SIGMA: f64 = 2e-3;
 /// The largest gain error adopted.
 pub const MAX_ERROR: f64 = 0.1;
+/// The smallest change of the gain in use worth adopting (a tenth of a percent is far below
+/// what the prediction's goals notice; smaller changes would follow the estimate's noise).
+pub const MIN_CHANGE: f64 = 1e-3;
 /// Episodes before a first adoption.
 const MIN_EPISODES: u32 = 8;
 /// Samples between a slip start and the restart of the integrator that carries it, at least.
 const MARGIN: u32 = 16;
+/// Samples summed before they are added to the integrators (a sample costs two additions; the
+/// integrators, their restarts and the episodes' ends go by blocks).
+const BLOCK: u32 = 8;
 
 /// One integrator: the double sum of the slip acceleration since its restart.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -74,10 +81,15 @@ impl Integrator {
 #[derive(Debug, Clone)]
 pub struct TableGain {
     dt2: f64,
+    /// Blocks between restarts, and to the next one.
     period: u32,
     countdown: u32,
     next: usize,
     slots: [Integrator; 2],
+    /// The block's Σ a and Σ Σ a, and its samples.
+    lv: f32,
+    lq: f32,
+    count: u32,
     /// The slot carrying a sliding episode (`None` while the base sticks).
     carrying: Option<usize>,
     /// The episode's stick arrived; it closes at the first valid displacement.
@@ -107,7 +119,10 @@ pub struct GainEstimate {
 impl TableGain {
     /// At `rate_hz`, for a detector whose events are back-dated by at most `max_age` samples.
     pub fn new(rate_hz: f32, max_age: usize) -> Self {
-        let period = (max_age as u32).saturating_add(2 * MARGIN).max(16);
+        let period = (max_age as u32)
+            .saturating_add(2 * MARGIN)
+            .max(16)
+            .div_ceil(BLOCK);
         let dt = 1.0 / f64::from(rate_hz);
         Self {
             dt2: dt * dt,
@@ -115,6 +130,9 @@ impl TableGain {
             countdown: 0,
             next: 0,
             slots: [Integrator::IDLE; 2],
+            lv: 0.0,
+            lq: 0.0,
+            count: 0,
             carrying: None,
             closing: false,
             last: 0.0,
@@ -155,13 +173,27 @@ impl TableGain {
         if a.is_finite() {
             self.last = a;
         }
-        for slot in self.slots.iter_mut() {
-            slot.v += self.last;
-            slot.q += slot.v;
-        }
+        self.lv += self.last;
+        self.lq += self.lv;
+        self.count += 1;
         if let Some(e) = event {
             self.event(index, e);
         }
+        if self.count >= BLOCK {
+            self.flush(index, s);
+        }
+    }
+
+    /// The block into the integrators, at its last sample `index` (slip `s`): then a restart
+    /// while the base sticks, or the episode's end.
+    #[inline(never)]
+    fn flush(&mut self, index: u32, s: f32) {
+        let n = self.count as f32;
+        for slot in self.slots.iter_mut() {
+            slot.q += n * slot.v + self.lq;
+            slot.v += self.lv;
+        }
+        (self.lv, self.lq, self.count) = (0.0, 0.0, 0);
         match self.carrying {
             Some(c) if self.closing && s.is_finite() => self.close(c, index, s),
             Some(_) => {}
@@ -182,6 +214,7 @@ impl TableGain {
         }
     }
 
+    #[inline(never)]
     fn event(&mut self, index: u32, e: &SlipEvent) {
         match (e, self.carrying) {
             (SlipEvent::SlipStart { .. }, None) => {
@@ -201,6 +234,7 @@ impl TableGain {
         }
     }
 
+    #[inline(never)]
     fn close(&mut self, c: usize, index: u32, s: f32) {
         self.carrying = None;
         self.closing = false;
@@ -240,11 +274,54 @@ impl TableGain {
         });
         if sigma < ADOPT_SIGMA
             && libm::fabs(gain - 1.0) <= MAX_ERROR
-            && libm::fabs(gain - f64::from(self.adopted)) > 3.0 * sigma
+            && libm::fabs(gain - f64::from(self.adopted)) > libm::fmax(3.0 * sigma, MIN_CHANGE)
         {
             self.adopted = gain as f32;
             self.inverse = 1.0 / self.adopted;
         }
+    }
+}
+
+/// Where a pipeline keeps its [`TableGain`]: `Option<TableGain>`, or `()` (no code, no storage:
+/// the fixed-base model's image, whose base never slides).
+pub trait GainSlot: Clone + core::fmt::Debug {
+    /// No gain identification.
+    fn none() -> Self;
+    /// The slot holding `gain` (`()`: still none).
+    fn of(gain: TableGain) -> Self;
+    /// The identification, if any.
+    fn get(&self) -> Option<&TableGain>;
+    /// The identification, if any.
+    fn get_mut(&mut self) -> Option<&mut TableGain>;
+}
+
+impl GainSlot for () {
+    fn none() -> Self {}
+    fn of(_: TableGain) -> Self {}
+    #[inline(always)]
+    fn get(&self) -> Option<&TableGain> {
+        None
+    }
+    #[inline(always)]
+    fn get_mut(&mut self) -> Option<&mut TableGain> {
+        None
+    }
+}
+
+impl GainSlot for Option<TableGain> {
+    fn none() -> Self {
+        None
+    }
+    fn of(gain: TableGain) -> Self {
+        Some(gain)
+    }
+    #[inline(always)]
+    fn get(&self) -> Option<&TableGain> {
+        self.as_ref()
+    }
+    #[inline(always)]
+    fn get_mut(&mut self) -> Option<&mut TableGain> {
+        self.as_mut()
     }
 }
 

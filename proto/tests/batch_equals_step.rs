@@ -1,7 +1,9 @@
 //! The firmware runs the pipeline in batches of `BATCH` samples, the host one sample at a time:
 //! both must give the same frames bit for bit (flags, events, predictions) and the same counters,
 //! for every model, on signals with friction events, events at batch edges, and unusable
-//! samples (NaN, missing, saturated), and with the sensor log's reversals as the events.
+//! samples (NaN, missing, saturated), and with the sensor log's reversals as the events; with the
+//! table accelerometer's gain identification on (its samples are the detector's, taken one at a
+//! time in either case).
 
 use ssvr_core::StructureParams;
 use ssvr_proto::log::LogReversal;
@@ -85,7 +87,7 @@ fn compare_with<M: Model + FromPlan + Clone, D: EventDetector + Clone>(
     bias: [f32; 3],
 ) {
     let plan = Plan::new(specimen(), model).unwrap().with_rest(rest_s);
-    let build = || {
+    let build = || -> Pipeline<M, D> {
         Pipeline::new(
             M::from_plan(&plan).unwrap(),
             D::from_plan(&plan).unwrap(),
@@ -93,6 +95,7 @@ fn compare_with<M: Model + FromPlan + Clone, D: EventDetector + Clone>(
             plan.disp_range_m(),
         )
         .with_rest(plan.rest_samples)
+        .with_table_gain(plan.specimen.sample_rate_hz as f32)
     };
     let (mut one, mut batched) = (build(), build());
     let n = 20_000;

@@ -180,12 +180,14 @@ pub(super) fn run_detector(t: &mut Ticks, plan: &Plan, model: &Model, det: &Dete
     };
     // In batches of BATCH, as the images run it: the loop alone fills the batch and touches the
     // frames.
-    let mut pipe = Pipeline::new(
+    // (With the image's table-gain identification: `Gain`.)
+    let mut pipe: Pipeline<_, _, crate::plan::Gain> = Pipeline::new(
         model.clone(),
         det.clone(),
         EventSource::Detector,
         plan.disp_range_m(),
-    );
+    )
+    .with_table_gain(plan.specimen.sample_rate_hz as f32);
     let mut batch = [Sample::missing(0); BATCH];
     let mut frames = [Frame::EMPTY; BATCH];
     let fill = |batch: &mut [Sample; BATCH], from: u32| {

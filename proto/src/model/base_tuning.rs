@@ -395,6 +395,11 @@ impl BaseTuning {
 
     #[inline(never)]
     fn adopt(&mut self) -> (Option<StickSlipCoefficients<f32>>, Option<f32>) {
+        // (Fuse mode has no use for a one-way estimate: not even solved.)
+        if self.fuse && !self.zeroed && !self.id.both_ways() {
+            self.adopt_top(None);
+            return (None, None);
+        }
         let estimate = self.id.estimate(self.zeroed);
         if let Some(e) = &estimate {
             self.adopt_offset(e);
