@@ -207,10 +207,11 @@ impl Plan {
     }
 
     /// Whether the pipeline identifies the table accelerometer's gain against the displacement
-    /// sensor ([`crate::table_gain`]): for the models of a base that slides (the fixed-base
-    /// model's never does, and the 8 KiB of its board's RAM have no room for it).
+    /// sensor ([`crate::table_gain`]): for the stick-slip model, the one that reads the
+    /// accelerometers' values (the rectangular model reads only the events; the fixed-base
+    /// model's base never slides, and its board's 8 KiB of RAM have no room for it).
     pub fn identifies_table_gain(&self) -> bool {
-        self.model != ModelKind::FixedBase
+        self.model == ModelKind::StickSlip
     }
 
     /// Whether the stick-slip model follows a velocity-dependent friction law: the specimen has

@@ -422,27 +422,40 @@ impl BaseTuning {
         };
         let mu = e.friction_accel / self.g as f64;
         let sd = e.friction_accel_std / self.g as f64;
-        let plausible = mu > 0.5 * self.prior_mu && mu < 2.0 * self.prior_mu;
-        let change = libm::fabs(mu - self.mu_use as f64);
-        // A new μ̂ when it differs significantly from the μ in use, or when it is known twice as
-        // well as an earlier μ̂ in use (the sliding top acceleration's error is (1 + r)·g times
-        // μ's): a right prior stays, a wrong one goes at the first significant estimate.
-        let better = sd < 0.5 * self.mu_std_use || change > 3.0 * sd;
-        let adopt = !self.fuse
-            && plausible
-            && sd < MAX_REL_STD_MU * mu
-            && change > MIN_REL_CHANGE_MU * mu
-            && better;
+        let plausible = self.plausible(mu);
+        let adopt = !self.fuse && self.worth(mu, sd, self.mu_use, self.mu_std_use);
         if adopt {
             self.mu_use = mu as f32;
             self.mu_std_use = sd;
             self.mu_adoptions = self.mu_adoptions.saturating_add(1);
         }
-        // Both ways slid: one μ for both directions.
+        // Both ways slid and μ known (adopted, or the one in use confirmed): one μ for both
+        // directions (an estimate not yet known keeps the directions' one-way levels).
+        let known = adopt || (plausible && sd < MAX_REL_STD_MU * mu);
         let one = [self.mu_use; 2];
-        let changed = adopt || (!self.fuse && self.mu_dir != one);
-        self.mu_dir = one;
-        (coefficients, changed.then(|| self.mu_for(self.level)))
+        let changed = !self.fuse && known && self.mu_dir != one;
+        if known {
+            self.mu_dir = one;
+        }
+        (coefficients, (adopt || changed).then(|| self.mu_for(self.level)))
+    }
+
+    /// Whether `mu` is within a factor of 2 of the prior's.
+    fn plausible(&self, mu: f64) -> bool {
+        mu > 0.5 * self.prior_mu && mu < 2.0 * self.prior_mu
+    }
+
+    /// Whether an estimate `mu` ± `sd` is worth adopting in place of `in_use` (known to
+    /// `std_use`; 0: a prior): plausible, known to [`MAX_REL_STD_MU`], and differing from it
+    /// significantly (3σ, and by [`MIN_REL_CHANGE_MU`]) or known twice as well (the sliding top
+    /// acceleration's error is (1 + r)·g times μ's): a right prior stays, a wrong one goes at the
+    /// first significant estimate.
+    fn worth(&self, mu: f64, sd: f64, in_use: f32, std_use: f64) -> bool {
+        let change = libm::fabs(mu - in_use as f64);
+        self.plausible(mu)
+            && sd < MAX_REL_STD_MU * mu
+            && change > MIN_REL_CHANGE_MU * mu
+            && (sd < 0.5 * std_use || change > 3.0 * sd)
     }
 
     /// Predict mode, the base slid one way only and no rest: f and ξ adopted as from both ways
@@ -463,12 +476,7 @@ impl BaseTuning {
         let (Some(in_use), Some(std_use)) = (self.mu_dir.get(i), self.mu_dir_std.get(i)) else {
             return (coefficients, None);
         };
-        let change = libm::fabs(mu - *in_use as f64);
-        let adopt = mu > 0.5 * self.prior_mu
-            && mu < 2.0 * self.prior_mu
-            && sd < MAX_REL_STD_MU * mu
-            && change > MIN_REL_CHANGE_MU * mu
-            && (sd < 0.5 * std_use || change > 3.0 * sd);
+        let adopt = self.worth(mu, sd, *in_use, *std_use);
         if adopt {
             if let (Some(m), Some(s)) = (self.mu_dir.get_mut(i), self.mu_dir_std.get_mut(i)) {
                 (*m, *s) = (mu as f32, sd);
