@@ -346,14 +346,28 @@ mod tests {
     /// gain error of 1.2 % and a residual offset of 2e-4 m/s²: the gain is found within 1e-4.
     #[test]
     fn the_gain_of_slip_episodes_against_the_displacement() {
+        let g = episodes(0.012, 12, false);
+        let est = g.estimate().expect("an estimate");
+        assert_eq!(est.episodes, 12);
+        assert!((est.gain - 1.012).abs() < 1e-4, "{est:?}");
+        assert!(est.sigma < 1e-4, "{est:?}");
+        assert!(est.sigma.is_finite());
+        assert!((f64::from(g.scale()) - 1.012).abs() < 1e-4);
+    }
+
+    /// `n` episodes (one sine period of slip acceleration each, alternating amplitude, stuck
+    /// 2000–3400 samples between) measured with a table gain error `e` and a residual offset of
+    /// 2e-4 m/s²; with `nan_at_stick` the displacement is missing for 30 samples from each stick
+    /// event on (the episode closes at the first valid one).
+    fn episodes(e: f64, n: u32, nan_at_stick: bool) -> TableGain {
         let rate = 10_000.0f32;
         let dt = 1.0 / f64::from(rate);
         let mut g = TableGain::new(rate, 300);
-        let (e, b) = (0.012, 2e-4);
+        let b = 2e-4;
         let mut s_true = 0.003f64; // the displacement sensor's offset is arbitrary
         let mut v_true = 0.0f64;
         let mut k = 0u32;
-        for ep in 0..12 {
+        for ep in 0..n {
             let stuck = 2000 + 700 * (ep % 3);
             let slide = 1500 + 400 * (ep % 2);
             let amp = if ep % 2 == 0 { 3.0 } else { -2.0 };
@@ -377,17 +391,37 @@ mod tests {
                 } else {
                     None
                 };
-                g.push(k, a, s_true as f32, event.as_ref());
+                let missing =
+                    nan_at_stick && (stuck + slide + 150..stuck + slide + 180).contains(&j);
+                let s = if missing { f32::NAN } else { s_true as f32 };
+                g.push(k, a, s, event.as_ref());
                 k += 1;
             }
             v_true = 0.0;
         }
-        let est = g.estimate().expect("an estimate");
+        g
+    }
+
+    /// What is not adopted: a gain error beyond [`MAX_ERROR`] (found, not used), and one below
+    /// [`MIN_CHANGE`]; a displacement missing at the stick only delays the episode's close.
+    #[test]
+    fn what_is_not_adopted_and_a_missing_displacement() {
+        let far = episodes(0.2, 12, false);
+        let est = far.estimate().expect("an estimate");
+        assert!((est.gain - 1.2).abs() < 1e-3, "{est:?}");
+        assert_eq!(far.scale(), 1.0);
+        let small = episodes(5e-4, 12, false);
+        let est = small.estimate().expect("an estimate");
+        assert!(
+            (est.gain - 1.0005).abs() < 1e-4 && est.sigma < 1e-4,
+            "{est:?}"
+        );
+        assert_eq!(small.scale(), 1.0);
+        let gaps = episodes(0.012, 12, true);
+        let est = gaps.estimate().expect("an estimate");
         assert_eq!(est.episodes, 12);
-        assert!((est.gain - (1.0 + e)).abs() < 1e-4, "{est:?}");
-        assert!(est.sigma < 1e-4, "{est:?}");
-        assert!(est.sigma.is_finite());
-        assert!((f64::from(g.scale()) - (1.0 + e)).abs() < 1e-4);
+        assert!((est.gain - 1.012).abs() < 1e-4, "{est:?}");
+        assert!((f64::from(gaps.scale()) - 1.012).abs() < 1e-4);
     }
 
     /// Short sticks: stuck for 100 samples between slides while the detector reports a stick 150
