@@ -437,7 +437,10 @@ impl BaseTuning {
         if known {
             self.mu_dir = one;
         }
-        (coefficients, (adopt || changed).then(|| self.mu_for(self.level)))
+        (
+            coefficients,
+            (adopt || changed).then(|| self.mu_for(self.level)),
+        )
     }
 
     /// Whether `mu` is within a factor of 2 of the prior's.
