@@ -77,7 +77,9 @@ fn table_gain_step(
 ) {
     let table = channels[Channel::TableAccel.index()];
     let base = channels[Channel::BaseAccel.index()];
-    let a = if f & (flags::MISSING | flags::NOT_FINITE | flags::SATURATED) == 0 {
+    // (A NaN base or table makes `a` NaN, held by the gain; a NaN top does not matter here.
+    // Saturation is flagged per sample, not per channel: a saturated sample is not used.)
+    let a = if f & (flags::MISSING | flags::SATURATED) == 0 {
         base - table
     } else {
         f32::NAN
