@@ -16,7 +16,9 @@
 //! 2. the detector processes its input ([`crate::DetectorInput::of`]; NaN when unusable) with the
 //!    table acceleration (the slip-acceleration detector removes the accelerometers' gain
 //!    mismatch against it); its event, or with [`EventSource::Log`] the sample's logged
-//!    reversal, is the sample's;
+//!    reversal, is the sample's; the model's inputs are prepared ([`model_inputs`]: the base in
+//!    the table's units, and with [`Pipeline::with_table_gain`] the table accelerometer's gain
+//!    identified against the displacement and divided out of every accelerometer);
 //! 3. the event goes to the model ([`Model::push`]) before the sample's prediction: flags
 //!    `EVENT_PUSHED` or `EVENT_REJECTED`;
 //! 4. the model predicts the sample (always, valid or not, to keep time).
