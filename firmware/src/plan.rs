@@ -66,10 +66,10 @@ pub fn detector(plan: &Plan) -> Result<Detector, PlanFault> {
 
 /// The pipeline of the plan at sample 0, its events from `source`.
 pub fn pipeline(plan: &Plan, source: EventSource) -> Result<ImagePipeline, PlanFault> {
-    // (`Gain` is `()` when the plan does not identify the table's gain: a no-op then.)
+    // (`Gain` is `()` when the plan does not identify the table's gain.)
     Ok(
         Pipeline::new(model(plan)?, detector(plan)?, source, plan.disp_range_m())
             .with_rest(plan.rest_samples)
-            .with_table_gain(plan.specimen.sample_rate_hz as f32),
+            .with_table_gain(plan),
     )
 }

@@ -67,13 +67,10 @@ impl Default for Options {
 fn with_model<D: EventDetector + 'static>(plan: &Plan, opts: Options) -> Result<Box<dyn Step>> {
     let m = model(plan, opts)?;
     let d = D::from_plan(plan).map_err(|e| anyhow!("detector: {e}"))?;
-    let p: Pipeline<_, _> =
-        Pipeline::new(m, d, opts.source, plan.disp_range_m()).with_rest(plan.rest_samples);
-    Ok(if plan.identifies_table_gain() {
-        Box::new(p.with_table_gain(plan.specimen.sample_rate_hz as f32))
-    } else {
-        Box::new(p)
-    })
+    let p: Pipeline<_, _> = Pipeline::new(m, d, opts.source, plan.disp_range_m())
+        .with_rest(plan.rest_samples)
+        .with_table_gain(plan);
+    Ok(Box::new(p))
 }
 
 /// The pipeline of a plan at sample 0: the firmware's model and detector types (the stick-slip
@@ -179,20 +176,15 @@ pub fn model_step(
 /// The pipeline's preparation of a sample's zeroed channels for its model, run apart from the
 /// pipeline: the plan's detector (the same code and ring) fed each sample's channels and flags,
 /// the base read in the table's units and the accelerometers divided by the table's gain
-/// identified against the displacement ([`ssvr_proto::pipeline::model_inputs`]). The f64 reference of `host-sim qemu` reads its
-/// inputs through it.
+/// identified against the displacement ([`ssvr_proto::pipeline::model_inputs`]). The f64
+/// reference of `host-sim qemu` reads its inputs through it.
 pub type InputTracker = Box<dyn FnMut(&mut [f32; ssvr_proto::CHANNELS], u8)>;
 
 /// [`InputTracker`] of a plan.
 pub fn input_tracker(plan: &Plan) -> Result<InputTracker> {
     fn make<D: EventDetector + 'static>(plan: &Plan) -> Result<InputTracker> {
         let mut d = D::from_plan(plan).map_err(|e| anyhow!("detector: {e}"))?;
-        let mut gain = plan.identifies_table_gain().then(|| {
-            ssvr_proto::table_gain::TableGain::new(
-                plan.specimen.sample_rate_hz as f32,
-                d.max_age_samples(),
-            )
-        });
+        let mut gain = ssvr_proto::table_gain::TableGain::of_plan(plan, d.max_age_samples());
         let mut index = 0u32;
         Ok(Box::new(move |ch, f| {
             let table = ch[ssvr_proto::Channel::TableAccel.index()];

@@ -103,7 +103,7 @@ fn check_common(v: &Value, samples: u64) {
     assert!(num(v, "reversals") >= 1.0);
     assert!(num(v, "flash_bytes") > 0.0 && num(v, "ram_bytes") > 0.0);
     assert!(num(v, "board_flash_bytes") <= num(&v["goals"], "board_flash_budget_bytes"));
-    // Measured 69 296 B (stick-slip, fuse, Coulomb, with the offsets' identification from the
+    // Measured 69 288 B (stick-slip, fuse, Coulomb, with the offsets' identification from the
     // sliding phases and the table's gain against the displacement: 51 172 B without them; the
     // velocity-dependent law is compiled in only for a scene with one); the budget is 96 KiB,
     // bounded here a little above the measured size so that a regression fails.

@@ -162,11 +162,13 @@ impl<M: Model, D: EventDetector, G: GainSlot> Pipeline<M, D, G> {
         }
     }
 
-    /// Identify the table accelerometer's gain against the displacement sensor ([`TableGain`],
-    /// samples at `rate_hz`) and give the model every accelerometer divided by it (nothing with
-    /// the slot `G = ()`: [`GainSlot`]).
-    pub fn with_table_gain(mut self, rate_hz: f32) -> Self {
-        self.gain = G::of(TableGain::new(rate_hz, self.detector.max_age_samples()));
+    /// Identify the table accelerometer's gain against the displacement sensor ([`TableGain`])
+    /// when `plan` does ([`crate::Plan::identifies_table_gain`]) and give the model every
+    /// accelerometer divided by it (nothing with the slot `G = ()`: [`GainSlot`]).
+    pub fn with_table_gain(mut self, plan: &crate::Plan) -> Self {
+        if let Some(g) = TableGain::of_plan(plan, self.detector.max_age_samples()) {
+            self.gain = G::of(g);
+        }
         self
     }
 

@@ -151,6 +151,13 @@ impl TableGain {
         }
     }
 
+    /// The identification of `plan`, if it has one ([`crate::Plan::identifies_table_gain`]), for
+    /// a detector whose events are back-dated by at most `max_age` samples.
+    pub fn of_plan(plan: &crate::Plan, max_age: usize) -> Option<Self> {
+        plan.identifies_table_gain()
+            .then(|| Self::new(plan.specimen.sample_rate_hz as f32, max_age))
+    }
+
     /// The adopted 1 + e (1 until an estimate is adopted): the accelerometers' samples in the
     /// table's units are divided by it.
     #[inline(always)]

@@ -95,7 +95,7 @@ fn compare_with<M: Model + FromPlan + Clone, D: EventDetector + Clone>(
             plan.disp_range_m(),
         )
         .with_rest(plan.rest_samples)
-        .with_table_gain(plan.specimen.sample_rate_hz as f32)
+        .with_table_gain(&plan)
     };
     let (mut one, mut batched) = (build(), build());
     let n = 20_000;

@@ -187,7 +187,7 @@ pub(super) fn run_detector(t: &mut Ticks, plan: &Plan, model: &Model, det: &Dete
         EventSource::Detector,
         plan.disp_range_m(),
     )
-    .with_table_gain(plan.specimen.sample_rate_hz as f32);
+    .with_table_gain(plan);
     let mut batch = [Sample::missing(0); BATCH];
     let mut frames = [Frame::EMPTY; BATCH];
     let fill = |batch: &mut [Sample; BATCH], from: u32| {

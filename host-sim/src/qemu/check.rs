@@ -73,7 +73,7 @@ pub fn instructions_goal(model: Model) -> f64 {
 /// soft-float and libm code: the stick-slip board image went from 32 600 B to 47 336 B), and
 /// the sliding observer and gain tracking (50 288 B); then 64 KiB until the identification
 /// from the sliding phases (65 040 B) and the table accelerometer's gain against the
-/// displacement sensor with predict mode's one-way friction (69 296 B). A fifth of the flash
+/// displacement sensor with predict mode's one-way friction (69 288 B). A fifth of the flash
 /// leaves the board room for its logging and transport code.
 pub const GOAL_BOARD_FLASH_BYTES: u64 = 96 * 1024;
 /// The board image's former flash budget (bytes), reported as `board_flash_le_32k`.

@@ -208,7 +208,7 @@ impl Reference {
                         }
                     }
                     if let Some(b) = base_tuning.as_mut() {
-                        if let Some(mu) = b.mu_at_event(phase) {
+                        if let Some(mu) = b.mu_at_event(phase, e.age_samples) {
                             est.set_friction(f64::from(mu));
                         }
                         b.event(phase, e.age_samples);

@@ -173,12 +173,12 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot> Model
             }
         }
         // Predict mode without a rest: each direction's friction until both are known.
-        // (Only for an event the estimator takes: a phase in −1..=1, a finite age ≥ 0.)
-        let valid = (-1..=1).contains(&phase) && e.age_samples.is_finite() && e.age_samples >= 0.0;
-        if let Some(mu) = self.base_tuning.get().and_then(|b| b.mu_at_event(phase)) {
-            if valid {
-                self.est.set_friction(mu);
-            }
+        if let Some(mu) = self
+            .base_tuning
+            .get()
+            .and_then(|b| b.mu_at_event(phase, e.age_samples))
+        {
+            self.est.set_friction(mu);
         }
         if e.kind == EventKind::SlipStart && e.age_samples <= self.max_age {
             if let Some(mu) = self.est.breakaway_coefficient(e.age_samples, self.fuse) {

@@ -2,7 +2,7 @@
 //! an event relabels the blocks after it, the block being summed closes into the ring, the
 //! oldest block leaves it for the identification.
 
-use super::{sign, BaseTuning, Block, GUARD};
+use super::{sign, takes, BaseTuning, Block, GUARD};
 
 impl BaseTuning {
     /// An event `age` samples before the next sample, setting the phase `level` (0: stuck):
@@ -11,7 +11,7 @@ impl BaseTuning {
     /// An event the estimator would reject (a level outside −1..=1, an age not finite or
     /// negative) changes nothing; the model passes only those it pushed.
     pub fn event(&mut self, level: i8, age: f32) {
-        if !((-1..=1).contains(&level) && age.is_finite() && age >= 0.0) {
+        if !takes(level, age) {
             return;
         }
         // Distances back from the next sample: a sample j is after the event (and its guard)

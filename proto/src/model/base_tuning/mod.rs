@@ -221,11 +221,12 @@ impl BaseTuning {
         (1.0 + self.r) * self.mu_for(level) * self.g * sign(level) - self.r * (base - self.offset)
     }
 
-    /// Predict mode: the friction coefficient to set at an event into phase `level` (`None`
-    /// when stuck, and in fuse mode, whose μ comes from the top accelerometer).
+    /// Predict mode: the friction coefficient to set at an event into phase `level`, `age`
+    /// samples old (`None` when stuck, for an event the estimator rejects, and in fuse mode,
+    /// whose μ comes from the top accelerometer).
     #[inline(always)]
-    pub fn mu_at_event(&self, level: i8) -> Option<f32> {
-        (!self.fuse && level != 0).then(|| self.mu_for(level))
+    pub fn mu_at_event(&self, level: i8, age: f32) -> Option<f32> {
+        (!self.fuse && level != 0 && takes(level, age)).then(|| self.mu_for(level))
     }
 
     /// The friction coefficient in use for phase `level`: μ, or while only one direction has
@@ -425,6 +426,13 @@ impl BaseTuning {
     pub fn report(&self) -> OscillatorReport {
         self.adoption.report(self.estimate())
     }
+}
+
+/// Whether the estimator takes an event into phase `level`, `age` samples old: a level in
+/// −1..=1, an age finite and ≥ 0 (`StickSlipEstimator::push_event`'s test).
+#[inline(always)]
+fn takes(level: i8, age: f32) -> bool {
+    (-1..=1).contains(&level) && age.is_finite() && age >= 0.0
 }
 
 /// The friction force's direction of a sliding phase level (±1).
