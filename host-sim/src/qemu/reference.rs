@@ -239,12 +239,19 @@ impl Reference {
                     } else {
                         f32::NAN
                     };
+                    // (Fuse mode without a rest: the open-loop start, for the top offset.)
+                    let open = !*predict && b.open_start() > 0;
                     let y_in = if *predict {
                         b.top_of(base, est.phase().level())
+                    } else if open {
+                        f32::NAN
                     } else {
                         b.top_corrected(top as f32)
                     };
                     let y = est.update(f64::from(table - b.offset()), f64::from(y_in));
+                    if open {
+                        b.note_open_start(&[top as f32], &[y as f32]);
+                    }
                     b.push_run(&[base], &[top as f32]);
                     let (c, mu) = b.check(1);
                     if c.is_some() {

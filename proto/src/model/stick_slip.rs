@@ -348,6 +348,8 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
         };
         let level = self.est.phase().level();
         let (off, fuse) = (bt.offset(), self.fuse);
+        // (Fuse mode without a rest: the first samples open loop, for the top offset.)
+        let open = if fuse { bt.open_start() } else { 0 };
         let (mut top, mut good, mut u) = ([0.0f32; BATCH], [0.0f32; BATCH], [0.0f32; BATCH]);
         for (((((y, g), u), f), (&b, &t)), &m) in top
             .iter_mut()
@@ -370,6 +372,9 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
             *u = t - off;
         }
         let n = frames.len();
+        if open > 0 {
+            top.iter_mut().take(open.min(n)).for_each(|y| *y = f32::NAN);
+        }
         let mut out = [0.0f32; BATCH];
         if let (Some(top), Some(good), Some(table), Some(pred)) =
             (top.get(..n), good.get(..n), u.get(..n), out.get_mut(..n))
@@ -377,6 +382,9 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
             if self.est.update_block(table, top, pred).is_ok() {
                 for (f, &p) in frames.iter_mut().zip(pred.iter()) {
                     f.prediction = p;
+                }
+                if open > 0 {
+                    bt.note_open_start(measured, pred);
                 }
             }
             bt.push_run(good, measured);

@@ -46,6 +46,7 @@ mod slot;
 mod top;
 
 pub use slot::BaseSlot;
+use top::OpenStart;
 
 /// Most blocks that wait for late events before they are used: as many as cover the detector's
 /// longest reporting delay (the plan's `max_age`) and [`GUARD`], plus one, up to this many (at
@@ -131,6 +132,8 @@ pub struct BaseTuning {
     /// The top accelerometer's offset in use (m/s²) and its standard deviation.
     top_offset: f32,
     top_offset_std_use: f64,
+    /// Fuse mode without a rest: the top offset from the first samples ([`OpenStart`]).
+    start: OpenStart,
     /// 1/G of the top accelerometer's gain G relative to the base's in use, and G's standard
     /// deviation.
     top_scale: f32,
@@ -205,6 +208,7 @@ impl BaseTuning {
             top_fit: PagedNormal::new(FORGETTING_PER_ROW),
             top_offset: 0.0,
             top_offset_std_use: 0.0,
+            start: OpenStart::new(fuse && !zeroed, &params, rate),
             top_scale: 1.0,
             top_gain_std_use: 0.0,
             id,
