@@ -136,3 +136,76 @@ impl BaseTuning {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::*;
+
+    fn params() -> StructureParams {
+        StructureParams {
+            m1_kg: 29.5,
+            m2_kg: 1.75,
+            natural_frequency_hz: 7.0,
+            damping_ratio: 0.05,
+            friction_coefficient: 0.2,
+            gravity_m_s2: 9.80665,
+        }
+    }
+
+    /// A deterministic stand-in for the sensor's noise: uniform in ±√3·`rms` (that RMS).
+    fn noise(k: u32, rms: f32) -> f32 {
+        let h = k.wrapping_mul(2_654_435_761).rotate_left(13) ^ 0x9e37_79b9;
+        let u = (h.wrapping_mul(2_246_822_519) >> 8) as f32 / (1u32 << 24) as f32;
+        (2.0 * u - 1.0) * 1.732_050_8 * rms
+    }
+
+    /// The start's length is the first 0.1 rad of p (22 samples at 7 Hz and 10 kHz, at least
+    /// one at a coarse rate); only fuse mode without a rest has one.
+    #[test]
+    fn the_open_start_is_fuse_mode_without_a_rest() {
+        let b = |zeroed, fuse, rate| {
+            BaseTuning::new(params(), rate, zeroed, fuse, 37)
+                .unwrap()
+                .open_start()
+        };
+        // 0.1 × 10 000 / (2π·7) = 22.7.
+        assert_eq!(b(false, true, 10_000.0), 22);
+        assert_eq!(b(false, true, 200.0), 1);
+        assert_eq!(b(true, true, 10_000.0), 0);
+        assert_eq!(b(false, false, 10_000.0), 0);
+    }
+
+    /// Measured − predicted over the start, in runs of any length (a missing sample skipped):
+    /// an offset of ±0.05 m/s² under 5e-3 m/s² of noise comes out within its standard error
+    /// (5e-3/√21 = 1.1e-3), taken with that standard deviation; without an offset nothing is
+    /// taken (3σ), and the momentum balance's later estimates decide. Samples after the start
+    /// are not read.
+    #[test]
+    fn the_start_gives_the_top_offset() {
+        for offset in [0.05f32, -0.05, 0.0] {
+            let mut b = BaseTuning::new(params(), 10_000.0, false, true, 37).unwrap();
+            let n = b.open_start();
+            let pred: [f32; 40] = core::array::from_fn(|k| 0.3 * libm::sinf(k as f32 * 0.05));
+            let mut measured: [f32; 40] =
+                core::array::from_fn(|k| pred[k] + offset + noise(k as u32, 5e-3));
+            measured[3] = f32::NAN;
+            // Samples after the start: far off, never read.
+            measured[n..].iter_mut().for_each(|m| *m = 1e3);
+            let mut at = 0;
+            for len in [5usize, 16, 19] {
+                let to = (at + len).min(40);
+                b.note_open_start(&measured[at..to], &pred[at..to]);
+                at = to;
+            }
+            assert_eq!(b.open_start(), 0);
+            let (found, sd) = (b.top_offset(), b.top_offset_std_use);
+            if offset == 0.0 {
+                assert_eq!((found, sd), (0.0, 0.0));
+            } else {
+                // Measured: 7.4e-4 off, σ 1.04e-3.
+                assert!((found - offset).abs() < 1e-3, "{found} for {offset}");
+                assert!(sd > 0.9e-3 && sd < 1.2e-3, "σ {sd}");
+            }
+        }
+    }
+}
