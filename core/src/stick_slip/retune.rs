@@ -73,4 +73,35 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
         self.gmu = self.c.g * mu;
         self.set_drive();
     }
+
+    /// Add `d` (m/s²) to the top acceleration of the last sample's state (its relative velocity
+    /// kept) and to that sample's measured top acceleration, which the next interval's
+    /// correction reads. For a change of what the measurement means between two samples: a
+    /// measurement that is a model of the top acceleration (predict mode's momentum balance,
+    /// (1 + r)·μ·g·s − r·ü2) jumps with the μ in it, and with the state shifted alike the
+    /// sliding observer sees no jump (else its transient, frozen into an open-loop stuck phase
+    /// when the base sticks during it, grows there into a free oscillation). A late event's
+    /// re-simulation from an earlier sample does not see the shift.
+    pub fn shift_top(&mut self, d: T) {
+        if !d.is_finite() {
+            return;
+        }
+        // (Right after a wrap of a ring without a copy slot, `at` is one before slot 0: the
+        // last sample is in the last slot.)
+        let at = if self.at < H { self.at } else { H - 1 };
+        if let Some(s) = self.slots.get_mut(at) {
+            s.z[0] += d;
+            s.y += d;
+        }
+        // The ring's copy of its last slot (slot 0, when it has one), either way.
+        if self.first == 1 && at + 1 == H {
+            self.copy_last();
+        } else if self.first == 1 && at == 0 {
+            if let Some(&s) = self.slots.first() {
+                if let Some(last) = self.slots.last_mut() {
+                    *last = s;
+                }
+            }
+        }
+    }
 }

@@ -253,6 +253,8 @@ impl Reference {
                         b.note_open_start(&[top as f32], &[y as f32]);
                     }
                     b.push_run(&[base], &[top as f32]);
+                    let level = est.phase().level();
+                    let before = b.mu_for(level);
                     let (c, mu) = b.check(1);
                     if c.is_some() {
                         let (f, xi, _) = b.in_use();
@@ -265,6 +267,10 @@ impl Reference {
                     }
                     if let Some(mu) = mu {
                         est.set_friction(f64::from(mu));
+                        let d = b.top_shift(level, before);
+                        if d != 0.0 {
+                            est.shift_top(f64::from(d));
+                        }
                     }
                     return Ok(y);
                 }

@@ -389,12 +389,25 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
             }
             bt.push_run(good, measured);
         }
+        if open > 0 {
+            // (The identification of f and ξ reads the measurement all along.)
+            for (y, &m) in top.iter_mut().zip(measured).take(open.min(n)) {
+                *y = bt.top_corrected(m);
+            }
+        }
+        let before = bt.mu_for(level);
         let (c, mu) = bt.check(n as u32);
         if let Some(c) = c {
             self.est.retune(c);
         }
         if let Some(mu) = mu {
             self.est.set_friction(mu);
+            // (Predict mode while sliding: the momentum balance's top jumps with μ; the state
+            // alike.)
+            let d = bt.top_shift(level, before);
+            if d != 0.0 {
+                self.est.shift_top(d);
+            }
         }
         if let (Some(t), Some(top)) = (&mut self.tuning, top.get(..n)) {
             t.push_run(top, base);
