@@ -337,6 +337,18 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
     /// the measured top less its identified offset, and the top accelerometer's tuning.
     #[inline(always)]
     fn predict_run_base(&mut self, frames: &mut [Frame], from: usize) {
+        // (Fuse mode without a rest: a run is split at the open-loop start's end, where the top
+        // offset may be adopted, so that every batching adopts it at the same sample.)
+        let open = match self.base_tuning.get() {
+            Some(bt) if self.fuse => bt.open_start(),
+            _ => 0,
+        };
+        if open > 0 && open < frames.len() {
+            let (first, rest) = frames.split_at_mut(open);
+            self.predict_run_base(first, from);
+            self.predict_run_base(rest, from + open);
+            return;
+        }
         let to = from + frames.len();
         let (Some(bt), Some(table), Some(base), Some(measured)) = (
             self.base_tuning.get_mut(),
@@ -348,8 +360,6 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
         };
         let level = self.est.phase().level();
         let (off, fuse) = (bt.offset(), self.fuse);
-        // (Fuse mode without a rest: the first samples open loop, for the top offset.)
-        let open = if fuse { bt.open_start() } else { 0 };
         let (mut top, mut good, mut u) = ([0.0f32; BATCH], [0.0f32; BATCH], [0.0f32; BATCH]);
         for (((((y, g), u), f), (&b, &t)), &m) in top
             .iter_mut()
@@ -373,6 +383,7 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
         }
         let n = frames.len();
         if open > 0 {
+            // (The open-loop start: no stuck-phase observer.)
             top.iter_mut().take(open.min(n)).for_each(|y| *y = f32::NAN);
         }
         let mut out = [0.0f32; BATCH];
