@@ -105,11 +105,21 @@ impl<T: Real, const N: usize, const K: usize> PagedNormal<T, N, K> {
     /// `None` if their normal equations are not positive definite or there are no more rows
     /// than parameters.
     pub fn solve<const M: usize>(&self) -> Option<Fit<M>> {
+        self.solve_with::<M>(None)
+    }
+
+    /// [`Self::solve`] with the covariance σ²·S⁻¹ of a given residual variance `sigma2` (one
+    /// tracked apart: the residual from the sums cancels in f32 when the fit is close).
+    pub fn solve_given<const M: usize>(&self, sigma2: f64) -> Option<Fit<M>> {
+        self.solve_with::<M>(Some(sigma2))
+    }
+
+    fn solve_with<const M: usize>(&self, sigma2: Option<f64>) -> Option<Fit<M>> {
         let mut v = [0.0f64; MAX_K];
         for ((d, &s), p) in v.iter_mut().zip(&self.sums).zip(&self.page) {
             *d = s + p.to_f64();
         }
-        let (theta, cov) = solve_packed(&v, N, M, self.rows())?;
+        let (theta, cov) = solve_packed(&v, N, M, self.rows(), sigma2)?;
         Some(Fit {
             theta: core::array::from_fn(|i| theta[i]),
             cov: core::array::from_fn(|i| core::array::from_fn(|j| cov[i][j])),
@@ -131,6 +141,7 @@ fn solve_packed(
     n: usize,
     m: usize,
     rows: f64,
+    sigma2: Option<f64>,
 ) -> Option<([f64; MAX_N], [[f64; MAX_N]; MAX_N])> {
     if m == 0 || m > n || n > MAX_N || rows <= m as f64 {
         return None;
@@ -152,7 +163,7 @@ fn solve_packed(
         theta[i] = (0..m).map(|j| inv[i][j] * v[c0 + j]).sum();
     }
     let fit: f64 = (0..m).map(|i| theta[i] * v[c0 + i]).sum();
-    let sigma2 = libm::fmax(v[c0 + n] - fit, 0.0) / (rows - m as f64);
+    let sigma2 = sigma2.unwrap_or(libm::fmax(v[c0 + n] - fit, 0.0) / (rows - m as f64));
     let mut cov = [[0.0f64; MAX_N]; MAX_N];
     for i in 0..m {
         for j in 0..m {

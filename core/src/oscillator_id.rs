@@ -20,6 +20,16 @@
 //! operator, so the relation holds up to the aliasing of what lies above the decimated Nyquist
 //! frequency (the structure's motion lies far below it).
 //!
+//! **The top accelerometer's gain.** A top accelerometer reading G·ü1 (the base's the reference)
+//! turns the relation into s²·A = −(p² + 2ξp·s)·(R + (1 − G)·B) with B = A − R the base
+//! acceleration: −Y = θ1·Φ1 + θ2·Φ2 + θ1·κ·Φ1(B) + θ2·κ·Φ2(B), κ = 1 − G. A second least squares
+//! on the four regressors (Φ1(B) = Φ1(A) − Φ1, Φ2(B) = Φ2(A) − Φ2: the A chain's, no third
+//! chain) gives a = (θ1, θ2, θ1·κ, θ2·κ) and G = 1 − a3/a1, with its standard deviation to
+//! first order ([`OscillatorIdentifier::gain_estimate`]: [`PagedNormal`], solved in f64 when
+//! asked). It separates
+//! G from the oscillator when the base's motion spans frequencies around p (a record); a single
+//! harmonic leaves the four regressors two sinusoids, and G unknown (singular or wide).
+//!
 //! **Estimation.** θ by recursive least squares in information form with forgetting ρ per
 //! block (normal equations S·θ = c, solved each block: one division), the a-priori residual's
 //! mean square tracked alongside. The standard deviations are the formal ones, σ²·S⁻¹, inflated
@@ -27,6 +37,7 @@
 //! A sample flagged missing or saturated repeats the last valid pair.
 
 use crate::error::{check, check_forgetting, check_sample_rate, Error, Param};
+use crate::least_squares::PagedNormal;
 use crate::math::Real;
 
 /// The identified oscillator.
@@ -48,7 +59,7 @@ pub struct OscillatorEstimate {
 /// documentation). Per sample: two additions and a count; per block of `decimation` samples:
 /// the two filter chains and one least-squares update.
 #[derive(Debug, Clone)]
-pub struct OscillatorIdentifier<T> {
+pub struct OscillatorIdentifier<T, G = ()> {
     decimation: u32,
     count: u32,
     sum_a: T,
@@ -78,6 +89,90 @@ pub struct OscillatorIdentifier<T> {
     lambda: f64,
     /// Correlation inflation of the variances (blocks per filter time constant).
     inflation: f64,
+    /// The top accelerometer's gain fit ([`TopGainFit`]), or `()`: none.
+    gain: G,
+}
+
+/// The top accelerometer's gain relative to the base's ([`OscillatorIdentifier::gain_estimate`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GainEstimate {
+    /// G: the top accelerometer reads G times the top acceleration (in the base's units).
+    pub gain: f64,
+    /// Its standard deviation.
+    pub gain_std: f64,
+}
+
+/// Where an [`OscillatorIdentifier`] keeps the top accelerometer's gain fit: [`TopGainFit`], or
+/// `()` (no fit, no storage: the fixed-base model's image has no RAM for it).
+pub trait GainRows<T>: Clone + core::fmt::Debug {
+    /// The fit for a forgetting `rho` per block.
+    fn new(rho: f64) -> Self;
+    /// One block's regressors `x` (Φ1, Φ2, Φ1(B), Φ2(B)), left-hand side `t`, the oscillator
+    /// fit's a-priori residual `e`, and the residual's smoothing `alpha`.
+    fn row(&mut self, x: [T; 4], t: T, e: T, alpha: T);
+    /// The gain, its variance inflated by `inflation` ([`OscillatorIdentifier::gain_estimate`]).
+    fn estimate(&mut self, inflation: f64) -> Option<GainEstimate>;
+}
+
+impl<T> GainRows<T> for () {
+    fn new(_: f64) -> Self {}
+    #[inline(always)]
+    fn row(&mut self, _: [T; 4], _: T, _: T, _: T) {}
+    fn estimate(&mut self, _: f64) -> Option<GainEstimate> {
+        None
+    }
+}
+
+/// The top accelerometer's gain fit (module documentation): the least squares on
+/// (Φ1, Φ2, Φ1(B), Φ2(B)) with forgetting, the fit of its last estimate (until then, the
+/// oscillator's with no gain term) and the mean square of its residual, tracked as the
+/// identifier's.
+#[derive(Debug, Clone)]
+pub struct TopGainFit<T> {
+    normal: PagedNormal<T, 4, 15>,
+    theta: Option<[T; 4]>,
+    e2: T,
+}
+
+impl<T: Real> GainRows<T> for TopGainFit<T> {
+    fn new(rho: f64) -> Self {
+        Self {
+            normal: PagedNormal::new(rho),
+            theta: None,
+            e2: T::ZERO,
+        }
+    }
+
+    #[inline(always)]
+    fn row(&mut self, x: [T; 4], t: T, e: T, alpha: T) {
+        let eg = match self.theta {
+            Some(g) => t - (g[0] * x[0] + g[1] * x[1] + g[2] * x[2] + g[3] * x[3]),
+            None => e,
+        };
+        let e2 = self.e2 + (eg * eg - self.e2) * alpha;
+        if e2.is_finite() {
+            self.e2 = e2;
+        }
+        self.normal.add(&x, t);
+    }
+
+    fn estimate(&mut self, inflation: f64) -> Option<GainEstimate> {
+        let var = self.e2.to_f64() * inflation;
+        let f = self.normal.solve_given::<4>(var)?;
+        let (a1, a3) = (f.theta[0], f.theta[2]);
+        if a1.is_nan() || a1 <= 0.0 {
+            return None;
+        }
+        self.theta = Some(f.theta.map(T::from_f64));
+        // G = 1 − a3/a1: ∂G/∂a1 = a3/a1², ∂G/∂a3 = −1/a1.
+        let (d1, d3) = (a3 / (a1 * a1), -1.0 / a1);
+        let v = d1 * d1 * f.cov[0][0] + 2.0 * d1 * d3 * f.cov[0][2] + d3 * d3 * f.cov[2][2];
+        let e = GainEstimate {
+            gain: 1.0 - a3 / a1,
+            gain_std: libm::sqrt(libm::fmax(v, 0.0)),
+        };
+        (e.gain.is_finite() && e.gain_std.is_finite() && e.gain_std < 0.1).then_some(e)
+    }
 }
 
 /// Length of the filter chains.
@@ -87,7 +182,7 @@ const DECIMATED_RATE_HZ: f64 = 500.0;
 /// Largest decimation (samples per block).
 pub const MAX_DECIMATION: u32 = 64;
 
-impl<T: Real> OscillatorIdentifier<T> {
+impl<T: Real, G: GainRows<T>> OscillatorIdentifier<T, G> {
     /// An identifier for samples at `sample_rate_hz`, its filters tuned to the prior's natural
     /// frequency `prior_frequency_hz`, forgetting `forgetting` per sample in (0, 1].
     pub fn new(
@@ -169,6 +264,7 @@ impl<T: Real> OscillatorIdentifier<T> {
             blocks: 0,
             lambda,
             inflation: blocks_per_tau,
+            gain: G::new(powi(forgetting, decimation)),
         })
     }
 
@@ -304,6 +400,8 @@ impl<T: Real> OscillatorIdentifier<T> {
         let e2 = self.e2 + (e * e - self.e2) * self.alpha;
         let finite = s.iter().chain(&c).all(|v| v.is_finite()) && e2.is_finite();
         if finite {
+            let x = [f1, f2, a4 - a5 - f1, a3 - (a4 + a4) + a5 - f2];
+            self.gain.row(x, t, e, self.alpha);
             (self.s, self.c, self.e2) = (s, c, e2);
             self.blocks = self.blocks.saturating_add(1);
             // Too little excitation yet (a singular system): keep the last θ.
@@ -311,6 +409,18 @@ impl<T: Real> OscillatorIdentifier<T> {
                 self.theta = theta;
             }
         }
+    }
+
+    /// The top accelerometer's gain (module documentation), solved in f64 (`None` without a
+    /// [`TopGainFit`], before the first usable blocks, or when the base's motion does not
+    /// separate it: a singular system, or a standard deviation above 0.1). The variance is the
+    /// residual's mean square (that of the fit of the last call: it needs `&mut`) inflated as
+    /// [`Self::estimate`]'s.
+    pub fn gain_estimate(&mut self) -> Option<GainEstimate> {
+        if self.blocks < 8 {
+            return None;
+        }
+        self.gain.estimate(self.inflation)
     }
 
     /// The estimate (`None` before any usable block).

@@ -12,9 +12,10 @@ use crate::scene::Scene;
 use anyhow::{anyhow, Result};
 use ssvr_core::closed_form::duhamel::{DuhamelClosedForm, Reversal, ReversalTrain};
 use ssvr_core::math::Libm;
+use ssvr_core::oscillator_id::TopGainFit;
 use ssvr_core::stick_slip::{SlidingPhase, StickSlipCoefficients, StickSlipEstimator};
 use ssvr_core::Structure;
-use ssvr_proto::model::{BaseSlot, BaseTuning, FrictionSlot, Mode, SlipFriction};
+use ssvr_proto::model::{BaseSlot, BaseTuning, FrictionSlot, Mode, SlipFriction, Tuning};
 use ssvr_proto::plan::MAX_HISTORY;
 use ssvr_proto::zeroing::Zeroing;
 use ssvr_proto::{flags, Frame, ModelKind as Model, Plan, Sample};
@@ -113,6 +114,10 @@ pub enum Reference {
         /// gives the sliding samples' top acceleration and the adoptions, applied to the f64
         /// estimator (coefficients re-derived in f64).
         base_tuning: Option<Box<BaseTuning>>,
+        /// Fuse mode beside a [`BaseTuning`]: the firmware's own tuning (f32) of f, ξ and the
+        /// top accelerometer's gain from the measured top and base, its adoptions applied to
+        /// the f64 estimator and the base tuning's top correction.
+        tuning: Option<Box<Tuning<TopGainFit<f32>>>>,
         /// The prior, with the f and ξ in use.
         prior: ssvr_core::StructureParams,
     },
@@ -159,6 +164,14 @@ impl Reference {
                 } else {
                     None
                 },
+                tuning: if plan.model == Model::StickSlip
+                    && !plan.follows_law()
+                    && plan.mode == Mode::Fuse
+                {
+                    Tuning::new(plan.specimen.structure, plan.specimen.sample_rate_hz).map(Box::new)
+                } else {
+                    None
+                },
                 prior: plan.specimen.structure,
             },
         })
@@ -193,6 +206,7 @@ impl Reference {
                 inputs,
                 predict,
                 base_tuning,
+                tuning,
                 prior,
             } => {
                 let mut channels = s.channels;
@@ -270,6 +284,22 @@ impl Reference {
                         let d = b.top_shift(level, before);
                         if d != 0.0 {
                             est.shift_top(f64::from(d));
+                        }
+                    }
+                    if let Some(t) = tuning.as_mut() {
+                        let raw_base = channels[ssvr_proto::Channel::BaseAccel.index()];
+                        t.push_run(&[top as f32], &[raw_base]);
+                        if t.check(1).is_some() {
+                            let (f, xi, _) = t.in_use();
+                            prior.natural_frequency_hz = f;
+                            prior.damping_ratio = xi;
+                            let c = Structure::new(*prior)
+                                .and_then(|s| StickSlipCoefficients::<f64>::new(&s, rate))
+                                .map_err(|e| anyhow!("the adopted f, ξ are invalid: {e:?}"))?;
+                            est.retune(c);
+                        }
+                        if let Some(g) = t.take_gain() {
+                            b.adopt_stuck_gain(g);
                         }
                     }
                     return Ok(y);

@@ -41,8 +41,9 @@ pub struct StickSlipModel<
     top: [f32; BATCH],
     /// The base acceleration (for the tuning).
     base: [f32; BATCH],
-    /// f and ξ identified and adopted online (fuse mode).
-    tuning: Option<Tuning>,
+    /// f and ξ identified and adopted online (fuse mode), with the top accelerometer's gain
+    /// beside a [`BaseTuning`] (which corrects the top by it).
+    tuning: Option<Tuning<B::TopGain>>,
     /// Fuse mode: the breakaway coefficients read the measured top acceleration (else the
     /// model's own).
     fuse: bool,
@@ -94,7 +95,7 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
     }
 
     /// The model identifying f and ξ online and adopting them ([`Tuning`]).
-    pub fn with_tuning(mut self, tuning: Option<Tuning>) -> Self {
+    pub fn with_tuning(mut self, tuning: Option<Tuning<B::TopGain>>) -> Self {
         self.tuning = tuning;
         self
     }
@@ -400,12 +401,6 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
             }
             bt.push_run(good, measured);
         }
-        if open > 0 {
-            // (The identification of f and ξ reads the measurement all along.)
-            for (y, &m) in top.iter_mut().zip(measured).take(open.min(n)) {
-                *y = bt.top_corrected(m);
-            }
-        }
         let before = bt.mu_for(level);
         let (c, mu) = bt.check(n as u32);
         if let Some(c) = c {
@@ -420,10 +415,15 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
                 self.est.shift_top(d);
             }
         }
-        if let (Some(t), Some(top)) = (&mut self.tuning, top.get(..n)) {
-            t.push_run(top, base);
+        // (The identification of f, ξ and the top's gain reads the measured top as it is: its
+        // offsets filtered out, its gain the one to find.)
+        if let Some(t) = &mut self.tuning {
+            t.push_run(measured, base);
             if let Some(c) = t.check(n as u32) {
                 self.est.retune(c);
+            }
+            if let Some(g) = t.take_gain() {
+                bt.adopt_stuck_gain(g);
             }
         }
     }

@@ -1,6 +1,7 @@
 //! Where the stick-slip model keeps its [`BaseTuning`] ([`BaseSlot`]).
 
 use super::BaseTuning;
+use ssvr_core::oscillator_id::{GainRows, TopGainFit};
 
 /// Where the stick-slip model keeps a [`BaseTuning`]: `Option<BaseTuning>` (the Coulomb
 /// stick-slip model, either mode), or `()` (the fixed-base model and the model of a
@@ -8,6 +9,9 @@ use super::BaseTuning;
 pub trait BaseSlot: Clone + core::fmt::Debug {
     /// Whether it can hold a tuning.
     const TUNES: bool;
+    /// The fuse mode tuning's fit of the top accelerometer's gain: the tuning corrects the top
+    /// by it (`()`: no fit, no storage).
+    type TopGain: GainRows<f32>;
     /// No tuning.
     fn none() -> Self;
     /// The slot of a plan.
@@ -20,6 +24,7 @@ pub trait BaseSlot: Clone + core::fmt::Debug {
 
 impl BaseSlot for () {
     const TUNES: bool = false;
+    type TopGain = ();
     fn none() -> Self {}
     fn of_plan(_: &crate::plan::Plan) -> Self {}
     #[inline(always)]
@@ -34,6 +39,7 @@ impl BaseSlot for () {
 
 impl BaseSlot for Option<BaseTuning> {
     const TUNES: bool = true;
+    type TopGain = TopGainFit<f32>;
     fn none() -> Self {
         None
     }
