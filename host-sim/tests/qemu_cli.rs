@@ -103,16 +103,18 @@ fn check_common(v: &Value, samples: u64) {
     assert!(num(v, "reversals") >= 1.0);
     assert!(num(v, "flash_bytes") > 0.0 && num(v, "ram_bytes") > 0.0);
     assert!(num(v, "board_flash_bytes") <= num(&v["goals"], "board_flash_budget_bytes"));
-    // Measured 69 288 B (stick-slip, fuse, Coulomb, with the offsets' identification from the
-    // sliding phases and the table's gain against the displacement: 51 172 B without them; the
-    // velocity-dependent law is compiled in only for a scene with one); the budget is 96 KiB,
-    // bounded here a little above the measured size so that a regression fails.
-    assert!(num(v, "board_flash_bytes") <= 70.0 * 1024.0);
+    // Measured 71 776 B (stick-slip, fuse, Coulomb, with the offsets' identification from the
+    // sliding phases and the open-loop start, the table's gain against the displacement and
+    // the top's gain from the stuck phases: 51 172 B without them; the velocity-dependent law
+    // is compiled in only for a scene with one); the budget is 96 KiB, bounded here a little
+    // above the measured size so that a regression fails.
+    assert!(num(v, "board_flash_bytes") <= 72.0 * 1024.0);
     assert!(num(v, "board_ram_bytes") <= 8.0 * 1024.0);
     // The model as the pipeline runs it, all identification on, against the budget of
     // 50 instructions per steady sample (reported, not met yet by the fuse-mode stick-slip and
-    // fixed-base models: measured 236.7 (96.8 before the offsets' identification from the
-    // sliding phases) and 88.3; rectangular 22.9). Bounded a little above the measured figures,
+    // fixed-base models: measured 245.0 (96.8 before the offsets' identification from the
+    // sliding phases, 236.7 before the top's offset and gain from the start and the stuck
+    // phases) and 92.0; rectangular 22.9). Bounded a little above the measured figures,
     // so a regression fails.
     let model = num(v, "instructions_per_steady_sample_model");
     println!(
