@@ -264,6 +264,19 @@ fn identifies_the_top_accelerometer_s_gain() {
     }
 }
 
+/// Below 10 samples per block (here 1 kHz: 2) no gain is estimated: the fit's discretisation
+/// bias grows as the rate falls (`MIN_GAIN_DECIMATION`).
+#[test]
+fn no_gain_at_low_rates() {
+    let data = record(7.0, 0.05, 1_000.0, 4.0, 5e-3, (0.0, 0.0));
+    let mut id = OscillatorIdentifier::<f32, TopGainFit<f32>>::new(1_000.0, 7.0, 0.99999).unwrap();
+    for &(a, b) in &data {
+        id.push(a as f32, b as f32, true);
+    }
+    assert!(id.estimate().is_some());
+    assert_eq!(id.gain_estimate(), None);
+}
+
 /// The gain estimate at the end of `data`, asked every 1024 samples as the model's checks do.
 fn gain_of<T: Real>(data: &[(f64, f64)], rate: f64, prior_f: f64) -> GainEstimate {
     let mut id = OscillatorIdentifier::<T, TopGainFit<T>>::new(rate, prior_f, 0.99999).unwrap();
