@@ -112,9 +112,9 @@ fn check_common(v: &Value, samples: u64) {
     assert!(num(v, "board_ram_bytes") <= 8.0 * 1024.0);
     // The model as the pipeline runs it, all identification on, against the budget of
     // 50 instructions per steady sample (reported, not met yet by the fuse-mode stick-slip and
-    // fixed-base models: measured 245.0 (96.8 before the offsets' identification from the
-    // sliding phases, 236.7 before the top's offset and gain from the start and the stuck
-    // phases) and 92.0; rectangular 22.9). Bounded a little above the measured figures,
+    // fixed-base models: measured 262.0 (96.8 before the offsets' identification from the
+    // sliding phases, 231.1 before the top's offset and gain from the start and the stuck
+    // phases, 245.0 before f and ξ on the corrected top) and 92.3; rectangular 22.9). Bounded a little above the measured figures,
     // so a regression fails.
     let model = num(v, "instructions_per_steady_sample_model");
     println!(
@@ -126,7 +126,7 @@ fn check_common(v: &Value, samples: u64) {
     let bound = if v["model"] == "rectangular" {
         25.0
     } else {
-        260.0
+        275.0
     };
     assert!(
         model.is_finite() && model > 0.0 && model <= bound,

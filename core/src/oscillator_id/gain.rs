@@ -25,15 +25,25 @@ pub trait GainRows<T>: Clone + core::fmt::Debug {
     fn row(&mut self, x: [T; 4], t: T, e: T, alpha: T);
     /// The gain, its variance inflated by `inflation` ([`OscillatorIdentifier::gain_estimate`](super::OscillatorIdentifier::gain_estimate)).
     fn estimate(&mut self, inflation: f64) -> Option<GainEstimate>;
+    /// The top's scale for the oscillator's rows
+    /// ([`OscillatorIdentifier::set_top_scale`](super::OscillatorIdentifier::set_top_scale)).
+    fn scale(&self) -> T;
+    /// Set it.
+    fn set_scale(&mut self, scale: T);
 }
 
-impl<T> GainRows<T> for () {
+impl<T: Real> GainRows<T> for () {
     fn new(_: f64) -> Self {}
     #[inline(always)]
     fn row(&mut self, _: [T; 4], _: T, _: T, _: T) {}
     fn estimate(&mut self, _: f64) -> Option<GainEstimate> {
         None
     }
+    #[inline(always)]
+    fn scale(&self) -> T {
+        T::ONE
+    }
+    fn set_scale(&mut self, _: T) {}
 }
 
 /// The top accelerometer's gain fit (module documentation): the least squares on
@@ -45,6 +55,7 @@ pub struct TopGainFit<T> {
     normal: PagedNormal<T, 4, 15>,
     theta: Option<[T; 4]>,
     e2: T,
+    scale: T,
 }
 
 impl<T: Real> GainRows<T> for TopGainFit<T> {
@@ -53,6 +64,7 @@ impl<T: Real> GainRows<T> for TopGainFit<T> {
             normal: PagedNormal::new(rho),
             theta: None,
             e2: T::ZERO,
+            scale: T::ONE,
         }
     }
 
@@ -67,6 +79,15 @@ impl<T: Real> GainRows<T> for TopGainFit<T> {
             self.e2 = e2;
         }
         self.normal.add(&x, t);
+    }
+
+    #[inline(always)]
+    fn scale(&self) -> T {
+        self.scale
+    }
+
+    fn set_scale(&mut self, scale: T) {
+        self.scale = scale;
     }
 
     fn estimate(&mut self, inflation: f64) -> Option<GainEstimate> {

@@ -709,7 +709,8 @@ fn breakaway_coefficient_interpolates_the_held_force() {
 /// velocity kept, evolves as the sliding oscillator's free response from Δx = −d/p², Δẋ = 0
 /// (closed form, ω = p·√M, ζ = ξ·√M): the shifted run less the unshifted one, open loop, at
 /// every position of rings of 8 and 9 slots (with and without the copy slot, and right after a
-/// wrap). A non-finite shift changes nothing.
+/// wrap). A non-finite shift changes nothing; the last sample's stored measurement moves with
+/// the state.
 #[test]
 fn shift_top_is_a_free_response_of_the_sliding_oscillator() {
     fn worst<const H: usize>() -> (f64, usize) {
@@ -765,6 +766,22 @@ fn shift_top_is_a_free_response_of_the_sliding_oscillator() {
         }
         (worst, first)
     }
+    // The stored measurement of the last sample, which the next interval's correction reads,
+    // moves with the state.
+    let mut e = StickSlipEstimator::<f64, Libm, 8>::new(&structure(0.2, 0.05), 1e4, {
+        StickSlipConfig::DEFAULT
+    })
+    .unwrap();
+    e.push_event(1, 0.0).unwrap();
+    for k in 0..13 {
+        e.update(0.1 * k as f64, 0.5);
+    }
+    let at = if e.at < 8 { e.at } else { 7 };
+    let before = e.slots[at];
+    e.shift_top(0.25);
+    assert_eq!(e.slots[at].y, before.y + 0.25);
+    assert_eq!(e.slots[at].z[0], before.z[0] + 0.25);
+    assert_eq!(e.slots[at].z[1], before.z[1]);
     let (w8, f8) = worst::<8>();
     let (w9, f9) = worst::<9>();
     std::println!("shift_top: worst {w8:.3e} (first slot {f8}), {w9:.3e} (first slot {f9}) m/s²");

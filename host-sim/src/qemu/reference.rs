@@ -269,6 +269,7 @@ impl Reference {
                     b.push_run(&[base], &[top as f32]);
                     let level = est.phase().level();
                     let before = b.mu_for(level);
+                    let scale = b.top_scale();
                     let (c, mu) = b.check(1);
                     if c.is_some() {
                         let (f, xi, _) = b.in_use();
@@ -300,6 +301,9 @@ impl Reference {
                         }
                         if let Some(g) = t.take_gain() {
                             b.adopt_stuck_gain(g);
+                        }
+                        if b.top_scale() != scale {
+                            t.set_top_scale(b.top_scale());
                         }
                     }
                     return Ok(y);

@@ -402,6 +402,9 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
             bt.push_run(good, measured);
         }
         let before = bt.mu_for(level);
+        // (The run's top scale: a change from the check's adoptions reaches the tuning from the
+        // next run, batches and single steps alike.)
+        let scale = bt.top_scale();
         let (c, mu) = bt.check(n as u32);
         if let Some(c) = c {
             self.est.retune(c);
@@ -415,8 +418,8 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
                 self.est.shift_top(d);
             }
         }
-        // (The identification of f, ξ and the top's gain reads the measured top as it is: its
-        // offsets filtered out, its gain the one to find.)
+        // (The identification reads the measured top as it is: its offsets filtered out, its
+        // gain the one to find; f and ξ are fitted on it scaled by the gain correction in use.)
         if let Some(t) = &mut self.tuning {
             t.push_run(measured, base);
             if let Some(c) = t.check(n as u32) {
@@ -424,6 +427,9 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
             }
             if let Some(g) = t.take_gain() {
                 bt.adopt_stuck_gain(g);
+            }
+            if bt.top_scale() != scale {
+                t.set_top_scale(bt.top_scale());
             }
         }
     }

@@ -45,7 +45,7 @@ pub struct Tuning<G = ()> {
 }
 
 /// Checks between two estimates of the top accelerometer's gain: each solves 4×4 normal
-/// equations in f64 (~8 000 M4F instructions, 8 per sample at every check); the gain changes
+/// equations in f64 (at every check ~6 M4F instructions more per sample); the gain changes
 /// slowly (El Centro: adopted at 0.8 s instead of 0.7 s).
 pub const GAIN_EVERY_CHECKS: u8 = 4;
 
@@ -78,7 +78,7 @@ impl<G: GainRows<f32>> Tuning<G> {
     }
 
     /// The last estimate of the top accelerometer's gain relative to the base's, once: made
-    /// every [`GAIN_EVERY_CHECKS`] checks with a gain fit ([`OscillatorIdentifier::gain_estimate`]).
+    /// every `GAIN_EVERY_CHECKS` checks with a gain fit ([`OscillatorIdentifier::gain_estimate`]).
     pub fn take_gain(&mut self) -> Option<GainEstimate> {
         self.gain_estimate.take()
     }
@@ -87,6 +87,13 @@ impl<G: GainRows<f32>> Tuning<G> {
     #[inline(always)]
     pub fn push_run(&mut self, top: &[f32], base: &[f32]) {
         self.id.push_run(top, base);
+    }
+
+    /// The model's correction of the top accelerometer's gain (1/G), for f and ξ
+    /// ([`OscillatorIdentifier::set_top_scale`]).
+    #[inline(always)]
+    pub fn set_top_scale(&mut self, scale: f32) {
+        self.id.set_top_scale(scale);
     }
 
     /// Count `samples` samples; at a check, the coefficients to adopt, if any.
