@@ -272,13 +272,7 @@ impl Reference {
                     let scale = b.top_scale();
                     let (c, mu) = b.check(1);
                     if c.is_some() {
-                        let (f, xi, _) = b.in_use();
-                        prior.natural_frequency_hz = f;
-                        prior.damping_ratio = xi;
-                        let c = Structure::new(*prior)
-                            .and_then(|s| StickSlipCoefficients::<f64>::new(&s, rate))
-                            .map_err(|e| anyhow!("the adopted f, ξ are invalid: {e:?}"))?;
-                        est.retune(c);
+                        retune(est, prior, b.in_use(), rate)?;
                     }
                     if let Some(mu) = mu {
                         est.set_friction(f64::from(mu));
@@ -291,13 +285,7 @@ impl Reference {
                         let raw_base = channels[ssvr_proto::Channel::BaseAccel.index()];
                         t.push_run(&[top as f32], &[raw_base]);
                         if t.check(1).is_some() {
-                            let (f, xi, _) = t.in_use();
-                            prior.natural_frequency_hz = f;
-                            prior.damping_ratio = xi;
-                            let c = Structure::new(*prior)
-                                .and_then(|s| StickSlipCoefficients::<f64>::new(&s, rate))
-                                .map_err(|e| anyhow!("the adopted f, ξ are invalid: {e:?}"))?;
-                            est.retune(c);
+                            retune(est, prior, t.in_use(), rate)?;
                         }
                         if let Some(g) = t.take_gain() {
                             b.adopt_stuck_gain(g);
@@ -336,4 +324,21 @@ impl Reference {
             } => (*level_changes, *out_of_order),
         }
     }
+}
+
+/// The f64 estimator retuned to the f and ξ a firmware tuning adopted (`in_use`: f, ξ,
+/// adoptions), its coefficients re-derived in f64 from the prior with them.
+fn retune(
+    est: &mut StickSlipEstimator<f64, Libm, MAX_HISTORY>,
+    prior: &mut ssvr_core::StructureParams,
+    (f, xi, _): (f64, f64, u32),
+    rate: f64,
+) -> Result<()> {
+    prior.natural_frequency_hz = f;
+    prior.damping_ratio = xi;
+    let c = Structure::new(*prior)
+        .and_then(|s| StickSlipCoefficients::<f64>::new(&s, rate))
+        .map_err(|e| anyhow!("the adopted f, ξ are invalid: {e:?}"))?;
+    est.retune(c);
+    Ok(())
 }

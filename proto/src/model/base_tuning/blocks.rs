@@ -125,15 +125,7 @@ mod tests {
     use std::vec::Vec;
 
     fn tuning() -> BaseTuning {
-        let params = StructureParams {
-            m1_kg: 29.5,
-            m2_kg: 1.75,
-            natural_frequency_hz: 7.0,
-            damping_ratio: 0.05,
-            friction_coefficient: 0.2,
-            gravity_m_s2: 9.80665,
-        };
-        BaseTuning::new(params, 10_000.0, false, true, 37).unwrap()
+        BaseTuning::new(test_params(), 10_000.0, false, true, 37).unwrap()
     }
 
     /// Events the estimator would reject change nothing and never panic; an event relabels the

@@ -240,16 +240,7 @@ impl BaseTuning {
 mod tests {
     use super::super::*;
 
-    fn params() -> StructureParams {
-        StructureParams {
-            m1_kg: 29.5,
-            m2_kg: 1.75,
-            natural_frequency_hz: 7.0,
-            damping_ratio: 0.05,
-            friction_coefficient: 0.2,
-            gravity_m_s2: 9.80665,
-        }
-    }
+    use super::super::test_params as params;
 
     /// A deterministic stand-in for the sensor's noise: uniform in ±√3·`rms` (that RMS).
     fn noise(k: u32, rms: f32) -> f32 {
