@@ -168,7 +168,8 @@ impl Reference {
                     && !plan.follows_law()
                     && plan.mode == Mode::Fuse
                 {
-                    Tuning::new(plan.specimen.structure, plan.specimen.sample_rate_hz).map(Box::new)
+                    Tuning::new(plan.specimen.structure, plan.specimen.sample_rate_hz)
+                        .map(|t| Box::new(t.after_rest(plan.rest_samples)))
                 } else {
                     None
                 },
