@@ -531,9 +531,13 @@ fn stick_slip_hard_cases() {
         let mu = e["mu_estimate"].as_f64().unwrap();
         println!("{name}: rms {rms} % of the peak, mu {mu}");
         assert!(rms < bound, "{name}: rms {rms} % (bound {bound} %)");
-        // μ̂ within 0.5 % (identification blocks of ~3.2 ms: 3 samples at 1 kHz). Measured
-        // with μ̂ adopted mid-episode and the fuse mode's observers: 1.2e-3 (undamped: no
-        // damping forgets the episode's start state), 2.7e-5, 8.6e-4 and 3.9e-4 relative.
-        assert!((mu / 0.2 - 1.0).abs() < 5e-3, "{name}: mu {mu}");
+        // μ̂ within 0.5 % (identification blocks of ~3.2 ms: 3 samples at 1 kHz), and within
+        // the 1 % with accelerometers 40× noisier: there μ̂'s own σ is 6.4e-3 relative.
+        // Measured with μ̂ adopted mid-episode and the fuse mode's observers: 1.2e-3 (undamped:
+        // no damping forgets the episode's start state), 3.1e-3, 8.7e-4 and 6.3e-3 (noisy; f
+        // and ξ adopted at 3.6 s, 0.11 % and 1.8 % off, as the 40× noise biases their fit, μ's
+        // least squares restarted).
+        let mu_bound = if noise > 0.1 { 1e-2 } else { 5e-3 };
+        assert!((mu / 0.2 - 1.0).abs() < mu_bound, "{name}: mu {mu}");
     }
 }

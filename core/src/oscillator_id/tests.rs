@@ -429,3 +429,37 @@ fn a_start_not_at_rest_is_dropped_at_twelve_time_constants() {
         assert!((e.damping_ratio / xi - 1.0).abs() < 2e-3, "{e:?}");
     }
 }
+
+/// After twelve filter time constants a start at rest's identifier is the default one, bit for
+/// bit (its rows dropped there, θ and the residual restarted): on a run from rest, on one that
+/// jumps at its first sample, and with the first samples missing (the default warm-up and the
+/// block's average start then from the first block on). And with a missing first sample no
+/// estimate comes before the default warm-up's end.
+#[test]
+fn a_start_at_rest_ends_up_as_the_default_identifier() {
+    let rate = 10_000.0;
+    let from_rest = record_from_rest(7.0, 0.05, rate, 2.0, 0.005);
+    let jump = record(7.0, 0.05, rate, 2.0, 0.005, (0.5, -0.5));
+    let mut gap = from_rest.clone();
+    for d in gap.iter_mut().take(3) {
+        *d = (f64::NAN, d.1);
+    }
+    for (name, data) in [("from rest", &from_rest), ("jump", &jump), ("gap", &gap)] {
+        let mut rest = OscillatorIdentifier::<f32, TopGainFit<f32>>::new(rate, 6.44, 0.99999)
+            .unwrap()
+            .starting_at_rest();
+        let mut default =
+            OscillatorIdentifier::<f32, TopGainFit<f32>>::new(rate, 6.44, 0.99999).unwrap();
+        for (k, &(a, b)) in data.iter().enumerate() {
+            let valid = a.is_finite() && b.is_finite();
+            rest.push(a as f32, b as f32, valid);
+            default.push(a as f32, b as f32, valid);
+            if k + 1 == 1_000 && name == "gap" {
+                assert!(rest.estimate().is_none(), "{name}");
+            }
+        }
+        assert!(default.estimate().is_some(), "{name}");
+        assert_eq!(rest.estimate(), default.estimate(), "{name}");
+        assert_eq!(rest.gain_estimate(), default.gain_estimate(), "{name}");
+    }
+}

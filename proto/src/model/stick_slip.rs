@@ -137,7 +137,8 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot> FromPlan
         let est = StickSlipF32::<H>::from_coefficients(c, plan.stick_slip, plan.history)
             .map_err(PlanError::Core)?;
         let tuning = match plan.mode {
-            Mode::Fuse => Tuning::new(plan.specimen.structure, plan.specimen.sample_rate_hz),
+            Mode::Fuse => Tuning::new(plan.specimen.structure, plan.specimen.sample_rate_hz)
+                .map(|t| t.after_rest(plan.rest_samples)),
             Mode::Predict => None,
         };
         let mut m = Self::new(est, plan.max_age as f32).with_tuning(tuning);
