@@ -360,11 +360,11 @@ impl<T: Real, G: GainRows<T>> OscillatorIdentifier<T, G> {
         }
     }
 
-    /// A missing sample in the first block: the samples before the first valid one repeat
-    /// (0, 0), not the offsets, and the line through the block would carry them to its start
-    /// (one missing first sample took f̂ 7 % off at 0.1 s). The chains start at the block's
-    /// average then (its Σk sums poisoned), with the default warm-up, as without
-    /// [`Self::starting_at_rest`].
+    /// A missing sample in the first block (or its sums overflowing): the samples before the
+    /// first valid one repeat (0, 0), not the offsets, and the line through the block would
+    /// carry them to its start (one missing first sample took f̂ 7 % off at 0.1 s). The chains
+    /// start at the block's average then (its Σk sums poisoned), with the default warm-up, as
+    /// without [`Self::starting_at_rest`].
     #[cold]
     #[inline(never)]
     fn first_block_gap(&mut self) {
@@ -420,6 +420,7 @@ impl<T: Real, G: GainRows<T>> OscillatorIdentifier<T, G> {
             let (a0, r0) = if finite {
                 self.start_values(ua, ur)
             } else {
+                self.first_block_gap();
                 (ua, ur)
             };
             (self.xa, self.xr) = ([a0; N], [r0; N]);

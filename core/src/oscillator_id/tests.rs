@@ -463,3 +463,30 @@ fn a_start_at_rest_ends_up_as_the_default_identifier() {
         assert_eq!(rest.gain_estimate(), default.gain_estimate(), "{name}");
     }
 }
+
+/// A first block whose sums overflow (two samples of 3e38 m/s², f32): its average is not
+/// finite and repeats the previous block's (none: zeros), and the chains start there, not at
+/// the huge finite extrapolation of its Σk sums, with the default warm-up (no estimate at
+/// 0.1 s); the identifier recovers (an estimate within 1e-3 after 4 s), as without
+/// `starting_at_rest`, bit for bit.
+#[test]
+fn an_overflowing_first_block_starts_at_its_average() {
+    let rate = 10_000.0;
+    let mut data = record_from_rest(7.0, 0.05, rate, 4.0, 0.005);
+    data[0].0 = 3e38;
+    data[1].0 = 3e38;
+    let mut rest = OscillatorIdentifier::<f32>::new(rate, 6.44, 0.99999)
+        .unwrap()
+        .starting_at_rest();
+    let mut default = OscillatorIdentifier::<f32>::new(rate, 6.44, 0.99999).unwrap();
+    for (k, &(a, b)) in data.iter().enumerate() {
+        rest.push(a as f32, b as f32, true);
+        default.push(a as f32, b as f32, true);
+        if k + 1 == 1_000 {
+            assert!(rest.estimate().is_none());
+        }
+    }
+    let e = rest.estimate().unwrap();
+    assert!((e.natural_frequency_hz / 7.0 - 1.0).abs() < 1e-3, "{e:?}");
+    assert_eq!(Some(e), default.estimate());
+}
