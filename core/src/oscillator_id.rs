@@ -35,6 +35,12 @@
 //! mean square tracked alongside. The standard deviations are the formal ones, σ²·S⁻¹, inflated
 //! by √(blocks per filter time constant) for the correlation the filters put between blocks.
 //! A sample flagged missing or saturated repeats the last valid pair.
+//!
+//! **Start.** The chains start in the steady state of the values before the first sample, the
+//! first block's least-squares line extrapolated to its first sample (at rest: the offsets
+//! alone), and skip twelve filter time constants of blocks; a run known to start at rest skips
+//! four and drops its rows at twelve time constants ([`OscillatorIdentifier::starting_at_rest`]):
+//! f̂ from ~0.1 s instead of ~0.3 s at 7 Hz.
 
 use crate::error::{check, check_forgetting, check_sample_rate, Error, Param};
 use crate::math::Real;
@@ -208,9 +214,10 @@ impl<T: Real, G: GainRows<T>> OscillatorIdentifier<T, G> {
     /// not a jump at the first sample). The chains then start where the first block's line
     /// extrapolates to its first sample, with no transient, and only [`WARMUP_AT_REST`] blocks
     /// are skipped instead of twelve filter time constants: the first estimate comes ~0.25 s
-    /// sooner at 7 Hz. At twelve time constants the rows so far are dropped, so that a run that does not start at rest (a jump at the first
-    /// sample, a steady oscillation from it) ends up as without the assumption, and the gain
-    /// fit starts there.
+    /// sooner at 7 Hz. At twelve time constants the rows so far are dropped, so that a run
+    /// that does not start at rest (a jump at the first sample, a steady oscillation from it)
+    /// ends up as without the assumption, bit for bit, and the gain fit starts there. A missing
+    /// sample in the first block falls back to the default start and warm-up.
     #[must_use]
     pub fn starting_at_rest(mut self) -> Self {
         if self.started == 0 {
