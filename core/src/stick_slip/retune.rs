@@ -32,11 +32,10 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
     /// model's own state does. (Ending it, the next block started a new episode mid-slide,
     /// and on Table 2 test 2 four blocks of it gave μ̂ = 0.105 for 0.2, adopted: 2.1 % of the
     /// peak on 20 rows of the scorecard once f was adopted within the first 0.2 s, in slides.)
-    /// A large change (p by more than
-    /// 0.1 %, or 2ξ by more than 10 %) also restarts its least squares from μ̂ with the initial
-    /// information: what the old model biased is dropped, and μ̂ is adopted again once
-    /// `min_blocks` new blocks are in; a small one keeps them (a short window of new blocks
-    /// would scatter μ̂ more than the old model's bias).
+    /// A large change (p by more than 0.1 %, or 2ξ by more than 10 %) also restarts its least
+    /// squares from μ̂ with the initial information: what the old model biased is dropped, and
+    /// μ̂ is adopted again once `min_blocks` new blocks are in; a small one keeps them (a short
+    /// window of new blocks would scatter μ̂ more than the old model's bias).
     pub fn retune(&mut self, c: StickSlipCoefficients<T>) {
         let scale = c.p / self.c.p;
         let dp = (scale - T::ONE).abs();
