@@ -31,41 +31,68 @@ fn record(
     noise: f64,
     offsets: (f64, f64),
 ) -> std::vec::Vec<(f64, f64)> {
-    let p = 2.0 * core::f64::consts::PI * f;
-    let sub = 8;
-    let h = 1.0 / rate / sub as f64;
     // The square wave flips every 0.07 s, on a sample (so that no RK4 step straddles a jump).
     let flip = (0.07 * rate) as usize;
-    let rhs =
-        |t: f64, q: f64, y: [f64; 2]| [y[1], -base(t, q) - 2.0 * xi * p * y[1] - p * p * y[0]];
-    let (mut y, mut t) = ([0.0f64; 2], 0.0);
-    let mut n = Noise(0x9e3779b97f4a7c15);
-    let amp = noise * libm::sqrt(3.0);
-    let mut out = std::vec::Vec::new();
-    for k in 0..(seconds * rate) as usize {
-        let q = if (k / flip).is_multiple_of(2) {
+    let q = |k: usize| {
+        if (k / flip).is_multiple_of(2) {
             1.0
         } else {
             -1.0
-        };
+        }
+    };
+    let drive = |t: f64, k: usize| base(t, q(k));
+    simulate(
+        f,
+        xi,
+        rate,
+        seconds,
+        noise,
+        offsets,
+        0x9e3779b97f4a7c15,
+        drive,
+    )
+}
+
+/// (top, base) accelerations at `rate` for `seconds` of an oscillator (f, ξ) at rest at t = 0,
+/// driven by the base acceleration `drive(t, k)` (k: the sample whose RK4 substeps are
+/// taken), RK4 at 8 substeps per sample, with uniform noise of RMS `noise` (seeded `seed`) and
+/// the offsets on both channels.
+#[allow(clippy::too_many_arguments)]
+fn simulate(
+    f: f64,
+    xi: f64,
+    rate: f64,
+    seconds: f64,
+    noise: f64,
+    offsets: (f64, f64),
+    seed: u64,
+    drive: impl Fn(f64, usize) -> f64,
+) -> std::vec::Vec<(f64, f64)> {
+    let p = 2.0 * core::f64::consts::PI * f;
+    let sub = 8;
+    let h = 1.0 / rate / sub as f64;
+    let (mut y, mut t) = ([0.0f64; 2], 0.0);
+    let mut n = Noise(seed);
+    let amp = noise * libm::sqrt(3.0);
+    let mut out = std::vec::Vec::new();
+    for k in 0..(seconds * rate) as usize {
+        let rhs = |t: f64, y: [f64; 2]| [y[1], -drive(t, k) - 2.0 * xi * p * y[1] - p * p * y[0]];
         let top = -p * p * y[0] - 2.0 * xi * p * y[1];
         out.push((
             top + offsets.0 + amp * n.next(),
-            base(t, q) + offsets.1 + amp * n.next(),
+            drive(t, k) + offsets.1 + amp * n.next(),
         ));
         for _ in 0..sub {
-            let k1 = rhs(t, q, y);
+            let k1 = rhs(t, y);
             let k2 = rhs(
                 t + h / 2.0,
-                q,
                 [y[0] + h / 2.0 * k1[0], y[1] + h / 2.0 * k1[1]],
             );
             let k3 = rhs(
                 t + h / 2.0,
-                q,
                 [y[0] + h / 2.0 * k2[0], y[1] + h / 2.0 * k2[1]],
             );
-            let k4 = rhs(t + h, q, [y[0] + h * k3[0], y[1] + h * k3[1]]);
+            let k4 = rhs(t + h, [y[0] + h * k3[0], y[1] + h * k3[1]]);
             for i in 0..2 {
                 y[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
             }
@@ -324,8 +351,8 @@ fn the_top_scale_corrects_f_and_xi() {
 
 /// (top, base) of the oscillator (f, ξ) driven from rest by a base acceleration that starts
 /// smoothly (two sines from 0: a table's start, no jump), RK4 at 8 substeps, with uniform
-/// noise of RMS `noise` and the offsets on both channels (the rest before the first sample
-/// reads them alone).
+/// noise of RMS `noise` and offsets of ±0.5 m/s² (the rest before the first sample reads them
+/// alone).
 fn record_from_rest(
     f: f64,
     xi: f64,
@@ -334,35 +361,17 @@ fn record_from_rest(
     noise: f64,
 ) -> std::vec::Vec<(f64, f64)> {
     let w = 2.0 * core::f64::consts::PI;
-    let base = |t: f64| 3.0 * libm::sin(w * 7.0 * t) + 1.0 * libm::sin(w * 2.3 * t);
-    let p = w * f;
-    let h = 1.0 / rate / 8.0;
-    let rhs = |t: f64, y: [f64; 2]| [y[1], -base(t) - 2.0 * xi * p * y[1] - p * p * y[0]];
-    let (mut y, mut t) = ([0.0f64; 2], 0.0);
-    let mut n = Noise(0x2545f4914f6cdd1d);
-    let amp = noise * libm::sqrt(3.0);
-    let mut out = std::vec::Vec::new();
-    for _ in 0..(seconds * rate) as usize {
-        let top = -p * p * y[0] - 2.0 * xi * p * y[1];
-        out.push((top + 0.5 + amp * n.next(), base(t) - 0.5 + amp * n.next()));
-        for _ in 0..8 {
-            let k1 = rhs(t, y);
-            let k2 = rhs(
-                t + h / 2.0,
-                [y[0] + h / 2.0 * k1[0], y[1] + h / 2.0 * k1[1]],
-            );
-            let k3 = rhs(
-                t + h / 2.0,
-                [y[0] + h / 2.0 * k2[0], y[1] + h / 2.0 * k2[1]],
-            );
-            let k4 = rhs(t + h, [y[0] + h * k3[0], y[1] + h * k3[1]]);
-            for i in 0..2 {
-                y[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
-            }
-            t += h;
-        }
-    }
-    out
+    let drive = |t: f64, _| 3.0 * libm::sin(w * 7.0 * t) + 1.0 * libm::sin(w * 2.3 * t);
+    simulate(
+        f,
+        xi,
+        rate,
+        seconds,
+        noise,
+        (0.5, -0.5),
+        0x2545f4914f6cdd1d,
+        drive,
+    )
 }
 
 /// A run from rest (`starting_at_rest`): the chains start where the first block's line meets

@@ -836,7 +836,9 @@ fn a_retune_mid_slide_keeps_the_friction_episode() {
         let y = truth.update(u, f64::NAN);
         est.update(u, y);
         if k > 1_050 {
-            worst_after = worst_after.max((est.mu_used() / 0.2 - 1.0).abs());
+            let err = (est.mu_used() / 0.2 - 1.0).abs();
+            assert!(err.is_finite(), "k {k}");
+            worst_after = worst_after.max(err);
         }
     }
     std::println!("μ in use after the retune: worst {worst_after:.2e}");

@@ -243,18 +243,8 @@ impl Adoption {
 
 #[cfg(test)]
 mod tests {
+    use super::super::base_tuning::test_params as params;
     use super::*;
-
-    fn params() -> StructureParams {
-        StructureParams {
-            m1_kg: 29.5,
-            m2_kg: 1.75,
-            natural_frequency_hz: 7.0,
-            damping_ratio: 0.05,
-            friction_coefficient: 0.2,
-            gravity_m_s2: 9.80665,
-        }
-    }
 
     /// (top, base) of sample k: an oscillation from rest (any deterministic signal would do).
     fn sample(k: usize) -> (f32, f32) {

@@ -459,9 +459,9 @@ impl BaseTuning {
     }
 }
 
-/// The Table 1 specimen, the prior of the unit tests.
+/// The Table 1 specimen, the prior of the unit tests (the model's tuning's too).
 #[cfg(test)]
-fn test_params() -> StructureParams {
+pub(super) fn test_params() -> StructureParams {
     StructureParams {
         m1_kg: 29.5,
         m2_kg: 1.75,
