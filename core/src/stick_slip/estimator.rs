@@ -65,6 +65,8 @@ pub struct StickSlipEstimator<T: Real, M: Transcendentals<T>, const H: usize> {
     pub(super) slides: [([T; 2], SlideMap<T>); 2],
     /// The narrow one is in use.
     pub(super) slide_narrow: bool,
+    /// μ̂ has been adopted at least once ([`StickSlipEstimator::mu_adopted`]).
+    pub(super) mu_adopted: bool,
     /// The stuck interval's map with the correction (a finite measured top acceleration at its
     /// start) and without.
     pub(super) closed: StuckMap<T>,
@@ -221,6 +223,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
             slide: slides[0].1,
             slides,
             slide_narrow: false,
+            mu_adopted: false,
             closed: StuckMap::closed(&c, gain),
             open: StuckMap::open(&c),
             c,
@@ -308,6 +311,13 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
     /// The μ the model uses now.
     pub fn mu_used(&self) -> f64 {
         self.mu_use.to_f64()
+    }
+
+    /// Whether the model has adopted the identified μ̂ at least once (with
+    /// [`StickSlipConfig::use_identified_mu`]): until then it uses the μ it was built or last
+    /// set with.
+    pub fn mu_adopted(&self) -> bool {
+        self.mu_adopted
     }
 
     /// The identified μ, with its standard deviation (None before any identification block was

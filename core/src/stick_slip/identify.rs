@@ -247,6 +247,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
         if self.cfg.use_identified_mu && self.id.rls.n >= self.cfg.min_blocks && plausible {
             self.mu_use = mu_hat;
             self.gmu = self.c.g * self.mu_use;
+            self.mu_adopted = true;
             if !self.slide_narrow {
                 self.slide_narrow = true;
                 (self.slide_gain, self.slide) = self.slides[1];

@@ -191,6 +191,7 @@ fn identifies_mu_from_a_sliding_response() {
     assert!((m.mu - 0.2).abs() < 1e-6, "{m:?}");
     assert!(m.std >= 0.0 && m.std < 1e-3, "{m:?}");
     assert_eq!(est.mu_used(), 0.25);
+    assert!(!est.mu_adopted(), "identified, not used");
 }
 
 /// A plain per-sample reference of the identification (phases kept for every interval, z_h
@@ -835,6 +836,8 @@ fn a_retune_mid_slide_keeps_the_friction_episode() {
         let u = 2.0 * (43.9 * t).sin();
         let y = truth.update(u, f64::NAN);
         est.update(u, y);
+        // Adopted from the first episode's blocks on, and it stays so through the retunes.
+        assert_eq!(est.mu_adopted(), est.mu_used() != 0.25, "k {k}");
         if k > 1_050 {
             let err = (est.mu_used() / 0.2 - 1.0).abs();
             assert!(err.is_finite(), "k {k}");
@@ -847,4 +850,5 @@ fn a_retune_mid_slide_keeps_the_friction_episode() {
     assert!(worst_after < 1e-2, "{worst_after}");
     let m = est.mu_estimate().unwrap();
     assert!((m.mu - 0.2).abs() < 1e-5, "{m:?}");
+    assert!(est.mu_adopted());
 }

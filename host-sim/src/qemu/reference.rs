@@ -15,10 +15,12 @@ use ssvr_core::math::Libm;
 use ssvr_core::oscillator_id::TopGainFit;
 use ssvr_core::stick_slip::{SlidingPhase, StickSlipCoefficients, StickSlipEstimator};
 use ssvr_core::Structure;
-use ssvr_proto::model::{BaseSlot, BaseTuning, FrictionSlot, Mode, SlipFriction, Tuning};
+use ssvr_proto::model::{
+    BaseSlot, BaseTuning, Breakaways, FrictionSlot, Mode, SlipFriction, Tuning,
+};
 use ssvr_proto::plan::MAX_HISTORY;
 use ssvr_proto::zeroing::Zeroing;
-use ssvr_proto::{flags, Frame, ModelKind as Model, Plan, Sample};
+use ssvr_proto::{flags, EventKind, Frame, ModelKind as Model, Plan, Sample};
 
 /// The friction train the estimator was given, as the firmware's frames report it, for the
 /// closed form: events pushed and accepted (flag `REVERSAL`), at t = (k − age)/rate (f64). Kept
@@ -120,6 +122,8 @@ pub enum Reference {
         tuning: Option<Box<Tuning<TopGainFit<f32>>>>,
         /// The prior, with the f and ξ in use.
         prior: ssvr_core::StructureParams,
+        /// The slip starts' breakaway coefficients (the firmware's code).
+        breakaways: Breakaways,
     },
 }
 
@@ -174,6 +178,7 @@ impl Reference {
                     None
                 },
                 prior: plan.specimen.structure,
+                breakaways: Breakaways::default(),
             },
         })
     }
@@ -209,6 +214,7 @@ impl Reference {
                 base_tuning,
                 tuning,
                 prior,
+                breakaways,
             } => {
                 let mut channels = s.channels;
                 zeroing.apply(k as u32, &mut channels, f.flags);
@@ -223,6 +229,18 @@ impl Reference {
                         }
                     }
                     if let Some(b) = base_tuning.as_mut() {
+                        // The first slides' friction from the breakaway (the firmware's code).
+                        let age = e.age_samples;
+                        if e.kind == EventKind::SlipStart && age <= *max_age {
+                            if let Some(mu) = est.breakaway_coefficient(f64::from(age), !*predict) {
+                                let mu = mu as f32;
+                                breakaways.push(mu);
+                                let held = if *predict { mu } else { breakaways.mean() };
+                                if let Some(m) = b.slip_start(phase, held, est.mu_adopted()) {
+                                    est.set_friction(f64::from(m));
+                                }
+                            }
+                        }
                         if let Some(mu) = b.mu_at_event(phase, e.age_samples) {
                             est.set_friction(f64::from(mu));
                         }

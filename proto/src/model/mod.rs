@@ -15,7 +15,7 @@ mod rectangular;
 mod stick_slip;
 mod tuning;
 
-pub use base_tuning::{BaseSlot, BaseTuning};
+pub use base_tuning::{BaseSlot, BaseTuning, PREDICT_BREAKAWAY_WEIGHT};
 pub use friction::{FrictionReport, FrictionSlot, SlipFriction};
 pub use rectangular::RectangularModel;
 pub use stick_slip::{FixedBaseModel, StickSlipF32, StickSlipLawModel, StickSlipModel};
@@ -227,7 +227,7 @@ pub struct StaticFriction {
 
 /// Running mean and variance (Welford) of the slip starts' breakaway coefficients.
 #[derive(Debug, Clone, Copy, Default)]
-pub(crate) struct Breakaways {
+pub struct Breakaways {
     n: u32,
     mean: f32,
     m2: f32,
@@ -235,15 +235,20 @@ pub(crate) struct Breakaways {
 
 impl Breakaways {
     /// One slip start's coefficient.
-    pub(crate) fn push(&mut self, mu: f32) {
+    pub fn push(&mut self, mu: f32) {
         self.n = self.n.saturating_add(1);
         let d = mu - self.mean;
         self.mean += d / self.n as f32;
         self.m2 += d * (mu - self.mean);
     }
 
+    /// The mean so far (0 before any slip start).
+    pub fn mean(&self) -> f32 {
+        self.mean
+    }
+
     /// The estimate, once there is a slip start.
-    pub(crate) fn report(&self) -> Option<StaticFriction> {
+    pub fn report(&self) -> Option<StaticFriction> {
         (self.n > 0).then(|| StaticFriction {
             mu_s: self.mean as f64,
             std: if self.n > 1 {

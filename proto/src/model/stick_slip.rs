@@ -174,6 +174,26 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot> Model
                 self.est.set_friction(f.since_slip_start());
             }
         }
+        if e.kind == EventKind::SlipStart && e.age_samples <= self.max_age {
+            if let Some(mu) = self.est.breakaway_coefficient(e.age_samples, self.fuse) {
+                self.breakaways.push(mu);
+                // The first slides' friction from the breakaway, before any estimate.
+                // (Fuse mode: the mean over the slip starts.)
+                let held = if self.fuse {
+                    self.breakaways.mean()
+                } else {
+                    mu
+                };
+                let adopted = self.est.mu_adopted();
+                if let Some(m) = self
+                    .base_tuning
+                    .get_mut()
+                    .and_then(|b| b.slip_start(phase, held, adopted))
+                {
+                    self.est.set_friction(m);
+                }
+            }
+        }
         // Predict mode without a rest: each direction's friction until both are known.
         if let Some(mu) = self
             .base_tuning
@@ -181,11 +201,6 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot> Model
             .and_then(|b| b.mu_at_event(phase, e.age_samples))
         {
             self.est.set_friction(mu);
-        }
-        if e.kind == EventKind::SlipStart && e.age_samples <= self.max_age {
-            if let Some(mu) = self.est.breakaway_coefficient(e.age_samples, self.fuse) {
-                self.breakaways.push(mu);
-            }
         }
         let pushed = if e.age_samples > self.max_age {
             self.est.push_event(phase, self.max_age)?;

@@ -42,6 +42,8 @@ use ssvr_core::stick_slip::{MuEstimate, StickSlipCoefficients};
 use ssvr_core::StructureParams;
 
 mod blocks;
+mod first_slides;
+pub use first_slides::PREDICT_BREAKAWAY_WEIGHT;
 mod slot;
 mod top;
 
@@ -150,6 +152,11 @@ pub struct BaseTuning {
     /// deviation.
     top_scale: f32,
     top_gain_std_use: f64,
+    /// μ is known from both directions (adopted, or the one in use confirmed).
+    mu_known: bool,
+    /// The prior's μ/μs: a slip start's breakaway coefficient times it is the slide's μ
+    /// ([`Self::slip_start`]).
+    mu_per_mu_s: f32,
 }
 
 /// A block of samples: base and top sums (averages once closed), its phase level (0: not to
@@ -207,6 +214,8 @@ impl BaseTuning {
             mu_use: params.friction_coefficient as f32,
             mu_dir: [params.friction_coefficient as f32; 2],
             mu_dir_std: [0.0; 2],
+            mu_known: false,
+            mu_per_mu_s: 1.0,
             mu_std_use: 0.0,
             offset_std_use: 0.0,
             mu_adoptions: 0,
@@ -350,6 +359,7 @@ impl BaseTuning {
         let changed = !self.fuse && known && self.mu_dir != one;
         if known {
             self.mu_dir = one;
+            self.mu_known = true;
         }
         (
             coefficients,

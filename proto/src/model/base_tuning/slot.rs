@@ -51,6 +51,7 @@ impl BaseSlot for Option<BaseTuning> {
             plan.mode == crate::model::Mode::Fuse,
             plan.max_age,
         )
+        .map(|b| b.with_static_friction(plan.specimen.static_friction_coefficient))
     }
     #[inline(always)]
     fn get(&self) -> Option<&BaseTuning> {
