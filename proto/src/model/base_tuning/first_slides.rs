@@ -32,11 +32,12 @@ use super::BaseTuning;
 /// and 0.60 for μ ± 25 % (default scene 0.37, from 1.24; El Centro 0.23, from 0.69).
 pub const PREDICT_BREAKAWAY_WEIGHT: f32 = 0.7;
 
-/// A slip start's coefficient (fuse mode: their mean) within this fraction of the prior's μ is
-/// taken for the prior's: its own error. The slip start is timed within a sample, and the held
-/// force is interpolated there: at 1 kHz (`host-sim/tests/replay_independent.rs`, the prior
-/// right) the coefficients came out 0.2–2.8 % low, and taking them took predict mode from 0.27
-/// to 0.41 % RMS; at 10 kHz they are within 0.1 %.
+/// A slip start's coefficient (fuse mode: their mean) within this fraction of the prior's μ, or
+/// within its change over the slip start's sample interval if larger, is taken for the prior's:
+/// its own error. The slip start is timed within a sample, and the held force is interpolated
+/// there: at 1 kHz (`host-sim/tests/replay_independent.rs`, the prior right) the coefficients
+/// came out 0.2–2.8 % low (their change over a sample ~4 % of μ), and taking them took predict
+/// mode from 0.27 to 0.41 % RMS; at 10 kHz they are within 0.1 %.
 pub const MIN_BREAKAWAY_CHANGE: f32 = 0.05;
 
 impl BaseTuning {
@@ -53,19 +54,22 @@ impl BaseTuning {
     }
 
     /// A detected slip start into phase `level` (±1): `mu_s` is its breakaway coefficient in
-    /// predict mode, in fuse mode the mean over the slip starts so far; `adopted`: the
-    /// estimator has adopted its own μ̂ (fuse mode). Returns the friction coefficient for the
-    /// fuse mode's model to use from the slip start on (`None`: keep the one in use; in predict
-    /// mode the direction's coefficient is updated instead, for [`Self::mu_at_event`]).
+    /// predict mode, in fuse mode the mean over the slip starts so far, and `step` the
+    /// coefficient's change over the sample interval of the slip start (its error for a slip
+    /// start timed within a sample); `adopted`: the estimator has adopted its own μ̂ (fuse
+    /// mode). Returns the friction coefficient for the fuse mode's model to use from the slip
+    /// start on (`None`: keep the one in use; in predict mode the direction's coefficient is
+    /// updated instead, for [`Self::mu_at_event`]).
     #[inline(never)]
-    pub fn slip_start(&mut self, level: i8, mu_s: f32, adopted: bool) -> Option<f32> {
+    pub fn slip_start(&mut self, level: i8, mu_s: f32, step: f32, adopted: bool) -> Option<f32> {
         let mu = mu_s * self.mu_per_mu_s;
         if !mu.is_finite() || level == 0 {
             return None;
         }
         // Within the breakaway's own error of the prior: the prior's.
         let prior = self.prior_mu as f32;
-        let mu = if (mu - prior).abs() < MIN_BREAKAWAY_CHANGE * prior {
+        let error = (MIN_BREAKAWAY_CHANGE * prior).max(step * self.mu_per_mu_s);
+        let mu = if (mu - prior).abs() < error {
             prior
         } else {
             mu
@@ -92,7 +96,8 @@ mod tests {
     use super::PREDICT_BREAKAWAY_WEIGHT as W;
 
     /// Predict mode: a slip start sets its own direction's μ, blended with the prior's 0.2, for
-    /// the event that starts the slide (the prior's within 5 % of it); the latest slip start
+    /// the event that starts the slide (the prior's within 5 % of it, or within the coefficient's
+    /// change over its sample interval); the latest slip start
     /// replaces an earlier one. Nothing
     /// changes for a coefficient beyond a factor 2 of the prior once blended, or not finite, for
     /// a direction with its own estimate from its slides, or once μ is known from both ways.
@@ -100,32 +105,35 @@ mod tests {
     fn predict_takes_each_directions_slip_start() {
         let mut b = BaseTuning::new(params(), 10_000.0, false, false, 37).unwrap();
         let close = |a: f32, b: f32| (a - b).abs() < 1e-6;
-        assert_eq!(b.slip_start(1, 0.25, false), None);
+        assert_eq!(b.slip_start(1, 0.25, 0.0, false), None);
         assert!(close(b.mu_for(1), 0.2 + W * 0.05), "{}", b.mu_for(1));
         assert_eq!(b.mu_for(-1), 0.2);
         assert_eq!(b.mu_at_event(1, 3.0), Some(b.mu_for(1)));
-        // Within MIN_BREAKAWAY_CHANGE (5 %) of the prior: the prior.
-        b.slip_start(1, 0.209, false);
+        // Within MIN_BREAKAWAY_CHANGE (5 %) of the prior, or within its change over the slip
+        // start's sample interval: the prior.
+        b.slip_start(1, 0.209, 0.0, false);
         assert_eq!(b.mu_for(1), 0.2);
-        b.slip_start(1, 0.15, false);
+        b.slip_start(1, 0.25, 0.06, false);
+        assert_eq!(b.mu_for(1), 0.2);
+        b.slip_start(1, 0.15, 0.0, false);
         assert!(close(b.mu_for(1), 0.2 - W * 0.05), "{}", b.mu_for(1));
         for mu in [0.8, f32::NAN, f32::INFINITY] {
-            b.slip_start(-1, mu, false);
+            b.slip_start(-1, mu, 0.0, false);
             assert_eq!(b.mu_for(-1), 0.2, "{mu}");
         }
-        b.slip_start(-1, 0.25, true);
+        b.slip_start(-1, 0.25, 0.0, true);
         assert!(
             close(b.mu_for(-1), 0.2 + W * 0.05),
             "adopted is fuse mode's"
         );
         b.mu_dir_std[1] = 1e-3;
-        b.slip_start(-1, 0.15, false);
+        b.slip_start(-1, 0.15, 0.0, false);
         assert!(
             close(b.mu_for(-1), 0.2 + W * 0.05),
             "its own estimate stays"
         );
         b.mu_known = true;
-        b.slip_start(1, 0.25, false);
+        b.slip_start(1, 0.25, 0.0, false);
         assert!(close(b.mu_for(1), 0.2 - W * 0.05), "μ known stays");
     }
 
@@ -136,14 +144,18 @@ mod tests {
     fn fuse_takes_the_mean_until_its_own_estimate() {
         let fuse = || BaseTuning::new(params(), 10_000.0, false, true, 37).unwrap();
         let mut b = fuse().with_static_friction(0.25);
-        let mu = b.slip_start(-1, 0.3, false).unwrap();
+        let mu = b.slip_start(-1, 0.3, 0.0, false).unwrap();
         assert!((mu - 0.24).abs() < 1e-6, "{mu}");
         assert_eq!(b.mu_for(-1), 0.2, "predict mode's levels untouched");
-        assert_eq!(b.slip_start(1, 0.26, false), Some(0.2), "0.208: the prior");
-        assert_eq!(b.slip_start(1, 0.3, true), None);
-        assert_eq!(b.slip_start(1, 0.6, false), None);
-        assert_eq!(b.slip_start(0, 0.25, false), None);
+        assert_eq!(
+            b.slip_start(1, 0.26, 0.0, false),
+            Some(0.2),
+            "0.208: the prior"
+        );
+        assert_eq!(b.slip_start(1, 0.3, 0.0, true), None);
+        assert_eq!(b.slip_start(1, 0.6, 0.0, false), None);
+        assert_eq!(b.slip_start(0, 0.25, 0.0, false), None);
         let mut b = fuse().with_static_friction(0.0);
-        assert_eq!(b.slip_start(1, 0.25, false), Some(0.25));
+        assert_eq!(b.slip_start(1, 0.25, 0.0, false), Some(0.25));
     }
 }
