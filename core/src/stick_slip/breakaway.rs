@@ -14,13 +14,6 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
     /// kept samples around that time. `None` outside the history, for a negative or non-finite
     /// age, or with a non-finite measurement.
     pub fn breakaway_coefficient(&self, age: T, measured: bool) -> Option<T> {
-        self.breakaway(age, measured).map(|(mu, _)| mu)
-    }
-
-    /// [`Self::breakaway_coefficient`] and its change over the sample interval it lies in (the
-    /// interval before it for the latest kept sample): what an error of the slip start's time
-    /// by up to a sample interval changes it by.
-    pub fn breakaway(&self, age: T, measured: bool) -> Option<(T, T)> {
         let k = self.sample_index();
         // The time k − age lies between samples j0 = k − ⌈age⌉ and j0 + 1 (the latest kept
         // sample is k − 1: a younger time takes it); NaN fails the range test.
@@ -31,26 +24,17 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
         let whole = libm::ceil(back).max(1.0);
         let j0 = k.checked_sub(whole as u64)?;
         let w = T::from_f64(whole - back);
-        let m = self.c.mp / self.c.p;
         let at = |j: u64| {
             self.slots.get(self.slot_of(j)).map(|s| {
                 let top = if measured { s.y } else { s.z[0] };
-                ((m - T::ONE) * top + s.u) / (m * self.c.g)
+                (s.u, top)
             })
         };
-        let f0 = at(j0)?;
-        let (f, step) = if j0 + 1 < k {
-            let f1 = at(j0 + 1)?;
-            (f0 + (f1 - f0) * w, (f1 - f0).abs())
-        } else {
-            // The latest kept sample: the interval before it, if kept.
-            let step = match j0.checked_sub(1) {
-                Some(j) if back + 1.0 < self.len as f64 - 1.0 => (f0 - at(j)?).abs(),
-                _ => T::ZERO,
-            };
-            (f0, step)
-        };
-        let mu = f.abs();
-        (mu.is_finite() && step.is_finite()).then_some((mu, step))
+        let (u0, y0) = at(j0)?;
+        let (u1, y1) = if j0 + 1 < k { at(j0 + 1)? } else { (u0, y0) };
+        let (u, y) = (u0 + (u1 - u0) * w, y0 + (y1 - y0) * w);
+        let m = self.c.mp / self.c.p;
+        let mu = ((m - T::ONE) * y + u).abs() / (m * self.c.g);
+        mu.is_finite().then_some(mu)
     }
 }

@@ -315,7 +315,8 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
 
     /// Whether the model has adopted the identified μ̂ at least once (with
     /// [`StickSlipConfig::use_identified_mu`]): until then it uses the μ it was built or last
-    /// set with.
+    /// set with. A large [`Self::retune`] restarts the least squares but keeps this: the μ̂ in
+    /// use stays until the next adoption.
     pub fn mu_adopted(&self) -> bool {
         self.mu_adopted
     }

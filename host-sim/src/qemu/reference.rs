@@ -232,12 +232,11 @@ impl Reference {
                         // The first slides' friction from the breakaway (the firmware's code).
                         let age = e.age_samples;
                         if e.kind == EventKind::SlipStart && age <= *max_age {
-                            if let Some((mu, step)) = est.breakaway(f64::from(age), !*predict) {
+                            if let Some(mu) = est.breakaway_coefficient(f64::from(age), !*predict) {
                                 let mu = mu as f32;
                                 breakaways.push(mu);
                                 let held = if *predict { mu } else { breakaways.mean() };
-                                let adopted = est.mu_adopted();
-                                if let Some(m) = b.slip_start(phase, held, step as f32, adopted) {
+                                if let Some(m) = b.slip_start(phase, held, est.mu_adopted()) {
                                     est.set_friction(f64::from(m));
                                 }
                             }

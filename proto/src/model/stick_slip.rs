@@ -175,7 +175,7 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot> Model
             }
         }
         if e.kind == EventKind::SlipStart && e.age_samples <= self.max_age {
-            if let Some((mu, step)) = self.est.breakaway(e.age_samples, self.fuse) {
+            if let Some(mu) = self.est.breakaway_coefficient(e.age_samples, self.fuse) {
                 self.breakaways.push(mu);
                 // The first slides' friction from the breakaway, before any estimate.
                 // (Fuse mode: the mean over the slip starts.)
@@ -188,7 +188,7 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot> Model
                 if let Some(m) = self
                     .base_tuning
                     .get_mut()
-                    .and_then(|b| b.slip_start(phase, held, step, adopted))
+                    .and_then(|b| b.slip_start(phase, held, adopted))
                 {
                     self.est.set_friction(m);
                 }

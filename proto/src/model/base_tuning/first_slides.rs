@@ -35,13 +35,19 @@ use super::BaseTuning;
 /// follows the slides (μ ± 25 %: 0.31 / 0.20 / 0.52 %, the f rows unchanged).
 pub const PREDICT_BREAKAWAY_WEIGHT: f32 = 0.7;
 
-/// A slip start's coefficient (fuse mode: their mean) within this fraction of the prior's μ, or
-/// within its change over the slip start's sample interval if larger, is taken for the prior's:
-/// its own error. The slip start is timed within a sample, and the held force is interpolated
-/// there: at 1 kHz (`host-sim/tests/replay_independent.rs`, the prior right) the coefficients
-/// came out 0.2–2.8 % low (their change over a sample ~4 % of μ), and taking them took predict
-/// mode from 0.27 to 0.41 % RMS; at 10 kHz they are within 0.1 %.
+/// A slip start's coefficient (fuse mode: their mean) within this fraction of the prior's μ is
+/// taken for the prior's: its own error. The slip start is timed within a sample, and the held
+/// force is interpolated there: at 1 kHz (`host-sim/tests/replay_independent.rs`, the prior
+/// right) the coefficients came out 0.2–2.8 % low, and taking them took predict mode from 0.27
+/// to 0.41 % RMS; at 10 kHz they are within 0.1 %. (Widening it to the coefficient's change
+/// over the slip start's sample interval, ~4 % of μ at 1 kHz, changed nothing at 10 kHz and
+/// took predict mode at 1 kHz with μ told 8 % off from 0.45 to 0.67 % RMS.)
 pub const MIN_BREAKAWAY_CHANGE: f32 = 0.05;
+
+/// The standard deviation that marks a direction's level as a slip start's (predict mode): a
+/// one-way estimate from that direction's slides known to `MAX_REL_STD_MU` then replaces it,
+/// as it would not replace a prior it is within 3σ of.
+pub(super) const FROM_BREAKAWAY: f64 = -1.0;
 
 impl BaseTuning {
     /// The prior's static friction coefficient `mu_s` (the tuning starts with μs = μ): a slip
@@ -57,22 +63,19 @@ impl BaseTuning {
     }
 
     /// A detected slip start into phase `level` (±1): `mu_s` is its breakaway coefficient in
-    /// predict mode, in fuse mode the mean over the slip starts so far, and `step` the
-    /// coefficient's change over the sample interval of the slip start (its error for a slip
-    /// start timed within a sample); `adopted`: the estimator has adopted its own μ̂ (fuse
-    /// mode). Returns the friction coefficient for the fuse mode's model to use from the slip
-    /// start on (`None`: keep the one in use; in predict mode the direction's coefficient is
-    /// updated instead, for [`Self::mu_at_event`]).
+    /// predict mode, in fuse mode the mean over the slip starts so far; `adopted`: the
+    /// estimator has adopted its own μ̂ (fuse mode). Returns the friction coefficient for the
+    /// fuse mode's model to use from the slip start on (`None`: keep the one in use; in predict
+    /// mode the direction's coefficient is updated instead, for [`Self::mu_at_event`]).
     #[inline(never)]
-    pub fn slip_start(&mut self, level: i8, mu_s: f32, step: f32, adopted: bool) -> Option<f32> {
+    pub fn slip_start(&mut self, level: i8, mu_s: f32, adopted: bool) -> Option<f32> {
         let mu = mu_s * self.mu_per_mu_s;
         if !mu.is_finite() || level == 0 {
             return None;
         }
         // Within the breakaway's own error of the prior: the prior's.
         let prior = self.prior_mu as f32;
-        let error = (MIN_BREAKAWAY_CHANGE * prior).max(step * self.mu_per_mu_s);
-        let mu = if (mu - prior).abs() < error {
+        let mu = if (mu - prior).abs() < MIN_BREAKAWAY_CHANGE * prior {
             prior
         } else {
             mu
@@ -88,8 +91,9 @@ impl BaseTuning {
         let w = if other { 1.0 } else { PREDICT_BREAKAWAY_WEIGHT };
         let mu = prior + w * (mu - prior);
         if !self.mu_known && !own && self.plausible(mu as f64) {
-            if let Some(m) = self.mu_dir.get_mut(i) {
+            if let (Some(m), Some(s)) = (self.mu_dir.get_mut(i), self.mu_dir_std.get_mut(i)) {
                 *m = mu;
+                *s = if mu == prior { 0.0 } else { FROM_BREAKAWAY };
             }
         }
         None
@@ -100,50 +104,48 @@ impl BaseTuning {
 mod tests {
     use super::super::test_params as params;
     use super::super::BaseTuning;
-    use super::PREDICT_BREAKAWAY_WEIGHT as W;
+    use super::{FROM_BREAKAWAY, PREDICT_BREAKAWAY_WEIGHT as W};
+    use ssvr_core::sliding_id::SlidingEstimate;
 
     /// Predict mode: a slip start sets its own direction's μ, blended with the prior's 0.2, for
-    /// the event that starts the slide (the prior's within 5 % of it, or within the coefficient's
-    /// change over its sample interval); the latest slip start
+    /// the event that starts the slide (the prior's within 5 % of it); the latest slip start
     /// replaces an earlier one. Nothing
     /// changes for a coefficient beyond a factor 2 of the prior once blended, or not finite, for
     /// a direction with its own estimate from its slides, or once μ is known from both ways.
     #[test]
     fn predict_takes_each_directions_slip_start() {
         let mut b = BaseTuning::new(params(), 10_000.0, false, false, 37).unwrap();
-        let close = |a: f32, b: f32| (a - b).abs() < 1e-6;
-        assert_eq!(b.slip_start(1, 0.25, 0.0, false), None);
+        assert_eq!(b.slip_start(1, 0.25, false), None);
         assert!(close(b.mu_for(1), 0.2 + W * 0.05), "{}", b.mu_for(1));
+        assert_eq!(b.mu_dir_std[0], FROM_BREAKAWAY);
         assert_eq!(b.mu_for(-1), 0.2);
         assert_eq!(b.mu_at_event(1, 3.0), Some(b.mu_for(1)));
-        // Within MIN_BREAKAWAY_CHANGE (5 %) of the prior, or within its change over the slip
-        // start's sample interval: the prior.
-        b.slip_start(1, 0.209, 0.0, false);
+        // Within MIN_BREAKAWAY_CHANGE (5 %) of the prior: the prior.
+        b.slip_start(1, 0.209, false);
         assert_eq!(b.mu_for(1), 0.2);
-        b.slip_start(1, 0.25, 0.06, false);
-        assert_eq!(b.mu_for(1), 0.2);
-        b.slip_start(1, 0.15, 0.0, false);
+        assert_eq!(b.mu_dir_std[0], 0.0, "the prior's");
+        b.slip_start(1, 0.15, false);
         assert!(close(b.mu_for(1), 0.2 - W * 0.05), "{}", b.mu_for(1));
         for mu in [0.8, f32::NAN, f32::INFINITY] {
-            b.slip_start(-1, mu, 0.0, false);
+            b.slip_start(-1, mu, false);
             assert_eq!(b.mu_for(-1), 0.2, "{mu}");
         }
-        b.slip_start(-1, 0.25, 0.0, true);
+        b.slip_start(-1, 0.25, true);
         assert!(
             close(b.mu_for(-1), 0.2 + W * 0.05),
             "adopted is fuse mode's"
         );
         b.mu_dir_std[1] = 1e-3;
-        b.slip_start(-1, 0.15, 0.0, false);
+        b.slip_start(-1, 0.15, false);
         assert!(
             close(b.mu_for(-1), 0.2 + W * 0.05),
             "its own estimate stays"
         );
         // The other direction has its own estimate: the coefficient whole.
-        b.slip_start(1, 0.25, 0.0, false);
+        b.slip_start(1, 0.25, false);
         assert_eq!(b.mu_for(1), 0.25);
         b.mu_known = true;
-        b.slip_start(1, 0.3, 0.0, false);
+        b.slip_start(1, 0.3, false);
         assert_eq!(b.mu_for(1), 0.25, "μ known stays");
     }
 
@@ -154,18 +156,50 @@ mod tests {
     fn fuse_takes_the_mean_until_its_own_estimate() {
         let fuse = || BaseTuning::new(params(), 10_000.0, false, true, 37).unwrap();
         let mut b = fuse().with_static_friction(0.25);
-        let mu = b.slip_start(-1, 0.3, 0.0, false).unwrap();
+        let mu = b.slip_start(-1, 0.3, false).unwrap();
         assert!((mu - 0.24).abs() < 1e-6, "{mu}");
         assert_eq!(b.mu_for(-1), 0.2, "predict mode's levels untouched");
-        assert_eq!(
-            b.slip_start(1, 0.26, 0.0, false),
-            Some(0.2),
-            "0.208: the prior"
-        );
-        assert_eq!(b.slip_start(1, 0.3, 0.0, true), None);
-        assert_eq!(b.slip_start(1, 0.6, 0.0, false), None);
-        assert_eq!(b.slip_start(0, 0.25, 0.0, false), None);
+        assert_eq!(b.slip_start(1, 0.26, false), Some(0.2), "0.208: the prior");
+        assert_eq!(b.slip_start(1, 0.3, true), None);
+        assert_eq!(b.slip_start(1, 0.6, false), None);
+        assert_eq!(b.slip_start(0, 0.25, false), None);
         let mut b = fuse().with_static_friction(0.0);
-        assert_eq!(b.slip_start(1, 0.25, 0.0, false), Some(0.25));
+        assert_eq!(b.slip_start(1, 0.25, false), Some(0.25));
+    }
+
+    /// Predict mode: a one-way estimate known to 2 % replaces a slip start's level even when
+    /// within 3σ of it (it would not replace a prior there), and is then that direction's own.
+    #[test]
+    fn a_one_way_estimate_replaces_a_slip_starts_level() {
+        let mut b = BaseTuning::new(params(), 10_000.0, false, false, 37).unwrap();
+        b.slip_start(1, 0.26, false);
+        let level = b.mu_for(1);
+        let g = params().gravity_m_s2;
+        let e = |mu: f64| SlidingEstimate {
+            omega: 2.0 * core::f64::consts::PI * 7.0 * libm::sqrt(1.0 + 29.5 / 1.75),
+            omega_std: 1e-3,
+            damping_ratio: 0.05 * libm::sqrt(1.0 + 29.5 / 1.75),
+            damping_ratio_std: 1e-4,
+            friction_accel: mu * g,
+            friction_accel_std: 2e-3 * g,
+            offset: 0.0,
+            offset_std: 0.0,
+            rows: 40.0,
+            one_way: 1,
+        };
+        // 1σ from the level in use: taken, and the direction's own from then on.
+        let (_, mu) = b.adopt_one_way(&e(level as f64 + 2e-3));
+        assert!(mu.is_some(), "an adoption");
+        assert!(close(b.mu_for(1), level + 2e-3), "{}", b.mu_for(1));
+        assert!(b.mu_dir_std[0] > 0.0);
+        // The same from the prior: kept (worth: 3σ).
+        let mut b = BaseTuning::new(params(), 10_000.0, false, false, 37).unwrap();
+        let (_, mu) = b.adopt_one_way(&e(0.202));
+        assert_eq!(mu, None);
+        assert_eq!(b.mu_for(1), 0.2);
+    }
+
+    fn close(a: f32, b: f32) -> bool {
+        (a - b).abs() < 1e-6
     }
 }

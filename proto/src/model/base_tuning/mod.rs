@@ -43,6 +43,7 @@ use ssvr_core::StructureParams;
 
 mod blocks;
 mod first_slides;
+use first_slides::FROM_BREAKAWAY;
 pub use first_slides::PREDICT_BREAKAWAY_WEIGHT;
 mod slot;
 mod top;
@@ -120,7 +121,8 @@ pub struct BaseTuning {
     mu_use: f32,
     /// The friction coefficient of each direction of the friction force (s = +1, −1) in use:
     /// μ, or until the base has slid both ways without a rest, that direction's one-way
-    /// estimate (the offset in it), with its standard deviation.
+    /// estimate (the offset in it), with its standard deviation (0: the prior's;
+    /// `FROM_BREAKAWAY`: a slip start's breakaway, [`Self::slip_start`]).
     mu_dir: [f32; 2],
     mu_dir_std: [f64; 2],
     /// The standard deviation of the μ in use (0: the prior's, replaced only by a μ̂ that
@@ -403,7 +405,14 @@ impl BaseTuning {
         let (Some(in_use), Some(std_use)) = (self.mu_dir.get(i), self.mu_dir_std.get(i)) else {
             return (coefficients, None);
         };
-        let adopt = self.worth(mu, sd, *in_use, *std_use);
+        // A level from a slip start's breakaway gives way to any estimate known well enough:
+        // taken for a prior, an estimate within 3σ of it would leave it, and its blend's share
+        // of the prior's error, slip start after slip start.
+        let adopt = if *std_use == FROM_BREAKAWAY {
+            self.plausible(mu) && sd < MAX_REL_STD_MU * mu
+        } else {
+            self.worth(mu, sd, *in_use, *std_use)
+        };
         if adopt {
             if let (Some(m), Some(s)) = (self.mu_dir.get_mut(i), self.mu_dir_std.get_mut(i)) {
                 (*m, *s) = (mu as f32, sd);
