@@ -21,6 +21,10 @@
 //!   its slides, or μ is known from both; blended with the prior's μ by
 //!   [`PREDICT_BREAKAWAY_WEIGHT`] until the other direction has its own estimate, as the
 //!   model's ü1 is only as right as the prior's f and ξ before the first slide.
+//!
+//! The ratio μ/μs is the prior's: a static coefficient told wrong on its own puts its error in
+//! the first slides (El Centro told μs = μ: predict mode 0.066 → 0.54 % RMS; docs/ROBUSTNESS.md).
+//! The slip acceleration's jump at the slip start, (μs − μ)·M·g, would measure it; not used.
 
 use super::BaseTuning;
 
