@@ -50,3 +50,16 @@ pub use model::{
 };
 pub use pipeline::{EventSource, Pipeline, Stats, Step, BATCH};
 pub use plan::{DetectorPlan, Plan, PlanError, Specimen};
+
+/// The Table 1 specimen, the prior of the crate's unit tests.
+#[cfg(test)]
+pub(crate) fn test_params() -> ssvr_core::StructureParams {
+    ssvr_core::StructureParams {
+        m1_kg: 29.5,
+        m2_kg: 1.75,
+        natural_frequency_hz: 7.0,
+        damping_ratio: 0.05,
+        friction_coefficient: 0.2,
+        gravity_m_s2: 9.80665,
+    }
+}

@@ -268,18 +268,9 @@ pub fn encode_record(s: &Sample, b: &mut [u8; MAX_RECORD_LEN]) -> usize {
 mod tests {
     use super::*;
 
-    const P: StructureParams = StructureParams {
-        m1_kg: 29.5,
-        m2_kg: 1.75,
-        natural_frequency_hz: 7.0,
-        damping_ratio: 0.05,
-        friction_coefficient: 0.2,
-        gravity_m_s2: 9.80665,
-    };
-
     #[test]
     fn header_and_records_round_trip() {
-        let p = P;
+        let p = crate::test_params();
         let h = Header::new(10_000.0, p, options::LOG_REVERSALS, 3);
         assert_eq!(parse_header(&encode_header(&h)), Ok(h));
         for s in [
@@ -319,14 +310,14 @@ mod tests {
 
     #[test]
     fn bad_headers_are_typed_errors() {
-        let h = Header::new(1000.0, P, 0, 0);
+        let h = Header::new(1000.0, crate::test_params(), 0, 0);
         let mut b = encode_header(&h);
         b[0] = b'X';
         assert_eq!(parse_header(&b), Err(LogError::BadMagic));
         let mut b = encode_header(&h);
         b[8] = 2;
         assert_eq!(parse_header(&b), Err(LogError::BadVersion(2)));
-        let mut b = encode_header(&Header::new(f64::NAN, P, 0, 0));
+        let mut b = encode_header(&Header::new(f64::NAN, crate::test_params(), 0, 0));
         assert_eq!(parse_header(&b), Err(LogError::BadSampleRate));
         b[12] = 3;
         assert_eq!(parse_header(&b), Err(LogError::BadChannelCount(3)));

@@ -481,14 +481,7 @@ mod tests {
 
     fn specimen(rate: f64) -> Specimen {
         Specimen {
-            structure: StructureParams {
-                m1_kg: 29.5,
-                m2_kg: 1.75,
-                natural_frequency_hz: 7.0,
-                damping_ratio: 0.05,
-                friction_coefficient: 0.2,
-                gravity_m_s2: 9.80665,
-            },
+            structure: crate::test_params(),
             static_friction_coefficient: 0.25,
             sample_rate_hz: rate,
             disp_noise_rms_m: 1e-6,

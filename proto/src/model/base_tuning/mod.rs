@@ -478,18 +478,8 @@ impl BaseTuning {
     }
 }
 
-/// The Table 1 specimen, the prior of the unit tests (the model's tuning's too).
 #[cfg(test)]
-pub(super) fn test_params() -> StructureParams {
-    StructureParams {
-        m1_kg: 29.5,
-        m2_kg: 1.75,
-        natural_frequency_hz: 7.0,
-        damping_ratio: 0.05,
-        friction_coefficient: 0.2,
-        gravity_m_s2: 9.80665,
-    }
-}
+pub(super) use crate::test_params;
 
 /// Whether the estimator takes an event into phase `level`, `age` samples old: a level in
 /// −1..=1, an age finite and ≥ 0 (`StickSlipEstimator::push_event`'s test).
