@@ -2,6 +2,12 @@
 //! with the table, so the friction holding it is m1·ü1 + m2·üg; at the slip start that force
 //! reaches μs·(m1 + m2)·g. Hence μs = |(M − 1)·ü1 + üg| / (M·g), M = 1 + m1/m2, from the top
 //! and table accelerations at the slip start's time (interpolated between the kept samples).
+//!
+//! Just after the start the base slides: m2·ü2 + m1·ü1 = −μ·(m1 + m2)·g·s, so the kinetic
+//! μ = |(M − 1)·ü1 + ü2| / (M·g) with ü2 = üg + s̈ the base's acceleration on the sliding side,
+//! s̈ the slip acceleration there (a detector's line through the first sliding samples,
+//! extrapolated back to the start: ü1 is continuous, ü2 jumps by (μs − μ)·M·g). That needs no
+//! μs ([`StickSlipEstimator::slide_coefficient`]).
 
 use super::estimator::StickSlipEstimator;
 use crate::math::{Real, Transcendentals};
@@ -14,6 +20,15 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
     /// kept samples around that time. `None` outside the history, for a negative or non-finite
     /// age, or with a non-finite measurement.
     pub fn breakaway_coefficient(&self, age: T, measured: bool) -> Option<T> {
+        self.slide_coefficient(age, measured, T::ZERO)
+    }
+
+    /// The kinetic friction coefficient of the slide a slip start `age` samples old begins:
+    /// |(M − 1)·ü1 + üg + s̈| / (M·g), as [`Self::breakaway_coefficient`] with the base's
+    /// acceleration on the sliding side, üg + `slip_accel`, for the table's: `slip_accel` is the
+    /// slip acceleration's sliding side at the start (m/s², the detector's; 0 gives μs). `None`
+    /// as there, and for a non-finite `slip_accel`.
+    pub fn slide_coefficient(&self, age: T, measured: bool, slip_accel: T) -> Option<T> {
         let k = self.sample_index();
         // The time k − age lies between samples j0 = k − ⌈age⌉ and j0 + 1 (the latest kept
         // sample is k − 1: a younger time takes it); NaN fails the range test.
@@ -34,7 +49,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
         let (u1, y1) = if j0 + 1 < k { at(j0 + 1)? } else { (u0, y0) };
         let (u, y) = (u0 + (u1 - u0) * w, y0 + (y1 - y0) * w);
         let m = self.c.mp / self.c.p;
-        let mu = ((m - T::ONE) * y + u).abs() / (m * self.c.g);
+        let mu = ((m - T::ONE) * y + u + slip_accel).abs() / (m * self.c.g);
         mu.is_finite().then_some(mu)
     }
 }

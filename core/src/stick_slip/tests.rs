@@ -672,7 +672,9 @@ fn sliding_phases_are_their_friction_levels() {
 }
 
 /// The breakaway coefficient at an age: |(M − 1)·ü1 + üg| / (M·g) of the top and table
-/// accelerations interpolated at that time, computed here by hand from the inputs fed.
+/// accelerations interpolated at that time, computed here by hand from the inputs fed; the
+/// slide's coefficient the same with üg + s̈. (Against the exact stick-slip truth:
+/// `host-sim/tests/prior_errors.rs`, a static coefficient told wrong.)
 #[test]
 fn breakaway_coefficient_interpolates_the_held_force() {
     let s = structure(0.2, 0.05);
@@ -704,6 +706,15 @@ fn breakaway_coefficient_interpolates_the_held_force() {
     assert!(est.breakaway_coefficient(f64::NAN, true).is_none());
     // The model's own prediction instead of the measurement: finite.
     assert!(est.breakaway_coefficient(2.0, false).unwrap().is_finite());
+    // The slide's coefficient: the base's acceleration üg + s̈ for the table's.
+    for (age, slip) in [(2.25, 0.0), (2.25, -3.0), (10.5, 0.7)] {
+        let got = est.slide_coefficient(age, true, slip).unwrap();
+        let t = 100.0 - age;
+        let (uu, yy) = (0.5 + 0.01 * t + slip, 1.0 - 0.02 * t);
+        let want = ((m - 1.0) * yy + uu).abs() / (m * s.g());
+        assert!((got - want).abs() < 1e-12, "{age} {slip}: {got}");
+    }
+    assert!(est.slide_coefficient(2.0, true, f64::NAN).is_none());
 }
 
 /// `shift_top`: the state's top acceleration shifted by d at a sliding sample, its relative
