@@ -7,6 +7,7 @@
 use crate::scene::Scene;
 use crate::sensors::{SensorFrame, FLAG_ACCEL_SATURATED, FLAG_DISP_SATURATED, FLAG_MISSING};
 use anyhow::{anyhow, bail, Result};
+use ssvr_core::detect::displacement::SlipEvent;
 use ssvr_proto::pipeline::model_inputs;
 use ssvr_proto::plan::MAX_HISTORY;
 use ssvr_proto::{
@@ -178,7 +179,7 @@ pub fn model_step(
 /// the base read in the table's units and the accelerometers divided by the table's gain
 /// identified against the displacement ([`ssvr_proto::pipeline::model_inputs`]). The f64
 /// reference of `host-sim qemu` reads its inputs through it.
-pub type InputTracker = Box<dyn FnMut(&mut [f32; ssvr_proto::CHANNELS], u8)>;
+pub type InputTracker = Box<dyn FnMut(&mut [f32; ssvr_proto::CHANNELS], u8) -> Option<f32>>;
 
 /// [`InputTracker`] of a plan.
 pub fn input_tracker(plan: &Plan) -> Result<InputTracker> {
@@ -192,6 +193,8 @@ pub fn input_tracker(plan: &Plan) -> Result<InputTracker> {
             let tracked = (d.offset(), d.gain_mismatch());
             model_inputs(ch, f, tracked, gain.as_mut(), index, event.as_ref());
             index = index.wrapping_add(1);
+            // A slip start's sliding side at its start (the pipeline notes it for the model).
+            matches!(event, Some(SlipEvent::SlipStart { .. })).then(|| d.slip_start_accel())
         }))
     }
     macro_rules! rings {

@@ -80,6 +80,11 @@ pub trait EventDetector: Sized {
     fn gain_mismatch(&self) -> f32 {
         0.0
     }
+    /// The last slip start's slip acceleration on its sliding side at its start (m/s²; NaN when
+    /// the detector does not measure it: the displacement's).
+    fn slip_start_accel(&self) -> f32 {
+        f32::NAN
+    }
 }
 
 impl<const N: usize> EventDetector for ReversalDetector<N> {
@@ -136,5 +141,9 @@ impl<const N: usize> EventDetector for PhaseDetector<N> {
 
     fn gain_mismatch(&self) -> f32 {
         PhaseDetector::gain_mismatch(self)
+    }
+
+    fn slip_start_accel(&self) -> f32 {
+        PhaseDetector::slip_start_accel(self)
     }
 }

@@ -205,8 +205,12 @@ impl<M: Model, D: EventDetector, G: GainSlot> Pipeline<M, D, G> {
         for (s, fr) in samples.iter().zip(frames.iter_mut()).take(BATCH) {
             let channels;
             (*fr, channels) = self.detect(s);
-            if fr.event.is_some() {
+            if let Some(e) = &fr.event {
                 events |= 1 << n;
+                if e.kind == EventKind::SlipStart {
+                    // (A batch holds one slip start at most: a stick comes between two.)
+                    self.model.note_slip_start(self.detector.slip_start_accel());
+                }
             }
             self.model.note_inputs(n, &channels, fr.flags);
             n += 1;

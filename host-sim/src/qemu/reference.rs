@@ -15,6 +15,7 @@ use ssvr_core::math::Libm;
 use ssvr_core::oscillator_id::TopGainFit;
 use ssvr_core::stick_slip::{SlidingPhase, StickSlipCoefficients, StickSlipEstimator};
 use ssvr_core::Structure;
+use ssvr_proto::model::SlipStart;
 use ssvr_proto::model::{
     BaseSlot, BaseTuning, Breakaways, FrictionSlot, Mode, SlipFriction, Tuning,
 };
@@ -124,6 +125,8 @@ pub enum Reference {
         prior: ssvr_core::StructureParams,
         /// The slip starts' breakaway coefficients (the firmware's code).
         breakaways: Breakaways,
+        /// The sliding side of the latest slip start its own detector found (the pipeline's).
+        start_accel: f32,
     },
 }
 
@@ -179,6 +182,7 @@ impl Reference {
                 },
                 prior: plan.specimen.structure,
                 breakaways: Breakaways::default(),
+                start_accel: f32::NAN,
             },
         })
     }
@@ -215,10 +219,13 @@ impl Reference {
                 tuning,
                 prior,
                 breakaways,
+                start_accel,
             } => {
                 let mut channels = s.channels;
                 zeroing.apply(k as u32, &mut channels, f.flags);
-                inputs(&mut channels, f.flags);
+                if let Some(a) = inputs(&mut channels, f.flags) {
+                    *start_accel = a;
+                }
                 if let Some(e) = f.event.filter(|_| f.flags & flags::EVENT_PUSHED != 0) {
                     let phase = if e.is_stick() { 0 } else { e.level };
                     if let Some(fr) = friction.as_mut() {
@@ -232,13 +239,23 @@ impl Reference {
                         // The first slides' friction from the breakaway (the firmware's code).
                         let age = e.age_samples;
                         if e.kind == EventKind::SlipStart && age <= *max_age {
-                            if let Some(mu) = est.breakaway_coefficient(f64::from(age), !*predict) {
-                                let mu = mu as f32;
+                            let fuse = !*predict;
+                            let mu_s = est.breakaway_coefficient(f64::from(age), fuse);
+                            let mu_s = mu_s.map(|m| m as f32);
+                            if let Some(mu) = mu_s {
                                 breakaways.push(mu);
-                                let held = if *predict { mu } else { breakaways.mean() };
-                                if let Some(m) = b.slip_start(phase, held, est.mu_adopted()) {
-                                    est.set_friction(f64::from(m));
-                                }
+                            }
+                            let slip = f64::from(*start_accel);
+                            let mu_k = est.slide_coefficient(f64::from(age), fuse, slip);
+                            let at = SlipStart {
+                                level: phase,
+                                mu_s,
+                                mu_s_mean: breakaways.mean(),
+                                mu_k: mu_k.map(|m| m as f32),
+                                adopted: est.mu_adopted(),
+                            };
+                            if let Some(m) = b.slip_start(&at) {
+                                est.set_friction(f64::from(m));
                             }
                         }
                         if let Some(mu) = b.mu_at_event(phase, e.age_samples) {
@@ -291,6 +308,8 @@ impl Reference {
                     let scale = b.top_scale();
                     let (c, mu) = b.check(1);
                     if c.is_some() {
+                        // (Predict mode: the m1 the slip starts found, with f and ξ.)
+                        prior.m1_kg = b.m1_in_use();
                         retune(est, prior, b.in_use(), rate)?;
                     }
                     if let Some(mu) = mu {

@@ -15,7 +15,7 @@ mod rectangular;
 mod stick_slip;
 mod tuning;
 
-pub use base_tuning::{BaseSlot, BaseTuning, PREDICT_BREAKAWAY_WEIGHT};
+pub use base_tuning::{BaseSlot, BaseTuning, SlipStart, PREDICT_BREAKAWAY_WEIGHT};
 pub use friction::{FrictionReport, FrictionSlot, SlipFriction};
 pub use rectangular::RectangularModel;
 pub use stick_slip::{FixedBaseModel, StickSlipF32, StickSlipLawModel, StickSlipModel};
@@ -181,6 +181,12 @@ pub trait Model {
     /// Keep the estimator's inputs of sample `i` of a batch: its channels (offsets removed) and
     /// flags.
     fn note_inputs(&mut self, i: usize, channels: &[f32; CHANNELS], flags: u8);
+    /// A detected slip start's slip acceleration on its sliding side at its start (m/s², the
+    /// detector's [`EventDetector::slip_start_accel`](crate::EventDetector::slip_start_accel)),
+    /// noted with its sample's inputs, for the slip start's push.
+    fn note_slip_start(&mut self, slip_accel: f32) {
+        let _ = slip_accel;
+    }
     /// Predict `frames`, samples `from ..` of the batch: a run with no event after its first
     /// sample. Bit for bit the same as one sample at a time.
     fn predict_run(&mut self, frames: &mut [Frame], from: usize);
@@ -247,6 +253,11 @@ impl Breakaways {
         self.mean
     }
 
+    /// How many coefficients the mean is of.
+    pub fn count(&self) -> u32 {
+        self.n
+    }
+
     /// The estimate, once there is a slip start.
     pub fn report(&self) -> Option<StaticFriction> {
         (self.n > 0).then(|| StaticFriction {
@@ -272,6 +283,9 @@ impl<M: Model + ?Sized> Model for std::boxed::Box<M> {
     }
     fn note_inputs(&mut self, i: usize, channels: &[f32; CHANNELS], flags: u8) {
         (**self).note_inputs(i, channels, flags)
+    }
+    fn note_slip_start(&mut self, slip_accel: f32) {
+        (**self).note_slip_start(slip_accel)
     }
     fn predict_run(&mut self, frames: &mut [Frame], from: usize) {
         (**self).predict_run(frames, from)

@@ -6,7 +6,7 @@
 //! beyond the plan's longest back-dating is clamped to it. A run of samples is predicted with
 //! `update_block` (bit for bit `update` on each sample).
 
-use super::base_tuning::{BaseSlot, BaseTuning};
+use super::base_tuning::{BaseSlot, BaseTuning, SlipStart};
 use super::friction::{FrictionReport, FrictionSlot, SlipFriction};
 use super::tuning::{OscillatorReport, Tuning};
 use super::{Breakaways, FromPlan, Mode, Model, ModelKind, Pushed, StaticFriction};
@@ -48,6 +48,9 @@ pub struct StickSlipModel<
     /// model's own).
     fuse: bool,
     breakaways: Breakaways,
+    /// The slip acceleration on the sliding side of the slip start to push (the detector's,
+    /// noted with its sample).
+    start_accel: f32,
     /// A velocity-dependent friction law (None: Coulomb).
     friction: F,
     /// The identification from the sliding base ([`BaseTuning`]): predict mode's f, ξ, μ and
@@ -89,6 +92,7 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
             tuning: None,
             fuse: true,
             breakaways: Breakaways::default(),
+            start_accel: f32::NAN,
             friction: F::none(),
             base_tuning: B::none(),
         }
@@ -175,24 +179,27 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot> Model
             }
         }
         if e.kind == EventKind::SlipStart && e.age_samples <= self.max_age {
-            if let Some(mu) = self.est.breakaway_coefficient(e.age_samples, self.fuse) {
+            let mu_s = self.est.breakaway_coefficient(e.age_samples, self.fuse);
+            if let Some(mu) = mu_s {
                 self.breakaways.push(mu);
-                // The first slides' friction from the breakaway, before any estimate.
-                // (Fuse mode: the mean over the slip starts.)
-                let held = if self.fuse {
-                    self.breakaways.mean()
-                } else {
-                    mu
+            }
+            // The first slides' friction from the slip start, before any estimate: the
+            // momentum balance on its sliding side (else the breakaway's).
+            let age = e.age_samples;
+            if let Some(b) = self.base_tuning.get_mut() {
+                let mu_k = self.est.slide_coefficient(age, self.fuse, self.start_accel);
+                let at = SlipStart {
+                    level: phase,
+                    mu_s,
+                    mu_s_mean: self.breakaways.mean(),
+                    mu_k,
+                    adopted: self.est.mu_adopted(),
                 };
-                let adopted = self.est.mu_adopted();
-                if let Some(m) = self
-                    .base_tuning
-                    .get_mut()
-                    .and_then(|b| b.slip_start(phase, held, adopted))
-                {
+                if let Some(m) = b.slip_start(&at) {
                     self.est.set_friction(m);
                 }
             }
+            self.start_accel = f32::NAN;
         }
         // Predict mode without a rest: each direction's friction until both are known.
         if let Some(mu) = self
@@ -214,6 +221,10 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot> Model
             b.event(phase, e.age_samples);
         }
         Ok(pushed)
+    }
+
+    fn note_slip_start(&mut self, slip_accel: f32) {
+        self.start_accel = slip_accel;
     }
 
     #[inline(always)]

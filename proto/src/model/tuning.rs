@@ -198,6 +198,21 @@ impl Adoption {
         Some(c)
     }
 
+    /// The prior with the f, ξ (and m1) in use.
+    pub fn params(&self) -> StructureParams {
+        self.params
+    }
+
+    /// Replace the prior in use (a new m1 with f and ξ rescaled: the base tuning's M).
+    pub fn set_params(&mut self, params: StructureParams) {
+        self.params = params;
+    }
+
+    /// The sample rate the coefficients are for (Hz).
+    pub fn rate(&self) -> f64 {
+        self.rate
+    }
+
     /// The f (Hz) and ξ in use, and how many times they were adopted.
     pub fn in_use(&self) -> (f64, f64, u32) {
         (

@@ -22,9 +22,16 @@
 //!   [`PREDICT_BREAKAWAY_WEIGHT`] until the other direction has its own estimate, as the
 //!   model's ü1 is only as right as the prior's f and ξ before the first slide.
 //!
-//! The ratio μ/μs is the prior's: a static coefficient told wrong on its own puts its error in
-//! the first slides (El Centro told μs = μ: predict mode 0.066 → 0.54 % RMS; docs/ROBUSTNESS.md).
-//! The slip acceleration's jump at the slip start, (μs − μ)·M·g, would measure it; not used.
+//! The kinetic μ of the slide comes from the slip start's sliding side, not through μs: just
+//! after the start m2·ü2 + m1·ü1 = −μ·(m1 + m2)·g·s, with ü1 continuous there and ü2 the
+//! table's acceleration plus the slip acceleration's sliding side at the start (the detector's
+//! line through its first sliding samples,
+//! [`PhaseDetector::slip_start_accel`](ssvr_core::detect::acceleration::PhaseDetector::slip_start_accel);
+//! it jumps by (μs − μ)·M·g), so
+//! [`StickSlipEstimator::slide_coefficient`](ssvr_core::stick_slip::StickSlipEstimator::slide_coefficient)
+//! needs no μs. Only when that is missing (no sliding side measured) is the breakaway's μs
+//! taken, times the prior's ratio μ/μs: a static coefficient told wrong on its own then put its
+//! error in the first slides (El Centro told μs = μ: predict mode 0.066 → 0.54 % RMS).
 
 use super::BaseTuning;
 
@@ -53,6 +60,24 @@ pub const MIN_BREAKAWAY_CHANGE: f32 = 0.05;
 /// as it would not replace a prior it is within 3σ of.
 pub(super) const FROM_BREAKAWAY: f64 = -1.0;
 
+/// A detected slip start, as [`BaseTuning::slip_start`] takes it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SlipStart {
+    /// The phase level it starts (±1).
+    pub level: i8,
+    /// Its breakaway coefficient μs
+    /// ([`StickSlipEstimator::breakaway_coefficient`](ssvr_core::stick_slip::StickSlipEstimator::breakaway_coefficient)),
+    /// from the measured top acceleration in fuse mode, the model's own in predict mode.
+    pub mu_s: Option<f32>,
+    /// The mean of the slip starts' μs so far, this one's included.
+    pub mu_s_mean: f32,
+    /// The kinetic coefficient from its sliding side
+    /// ([`StickSlipEstimator::slide_coefficient`](ssvr_core::stick_slip::StickSlipEstimator::slide_coefficient)).
+    pub mu_k: Option<f32>,
+    /// The estimator has adopted its own μ̂ (fuse mode).
+    pub adopted: bool,
+}
+
 impl BaseTuning {
     /// The prior's static friction coefficient `mu_s` (the tuning starts with μs = μ): a slip
     /// start's breakaway coefficient times μ/μs is its slide's μ.
@@ -66,14 +91,32 @@ impl BaseTuning {
         self
     }
 
-    /// A detected slip start into phase `level` (±1): `mu_s` is its breakaway coefficient in
-    /// predict mode, in fuse mode the mean over the slip starts so far; `adopted`: the
-    /// estimator has adopted its own μ̂ (fuse mode). Returns the friction coefficient for the
-    /// fuse mode's model to use from the slip start on (`None`: keep the one in use; in predict
-    /// mode the direction's coefficient is updated instead, for [`Self::mu_at_event`]).
+    /// A detected slip start ([`SlipStart`]). Returns the friction coefficient for the fuse
+    /// mode's model to use from the slip start on (`None`: keep the one in use; in predict mode
+    /// the direction's coefficient is updated instead, for [`Self::mu_at_event`]).
     #[inline(never)]
-    pub fn slip_start(&mut self, level: i8, mu_s: f32, adopted: bool) -> Option<f32> {
-        let mu = mu_s * self.mu_per_mu_s;
+    pub fn slip_start(&mut self, at: &SlipStart) -> Option<f32> {
+        let level = at.level;
+        let mu_k = at.mu_k.filter(|m| m.is_finite());
+        if let Some(m) = mu_k {
+            self.slides.push(m);
+            // (Predict mode, μ known: the slide's coefficient from the model's ü1 against it
+            // measures p's error.)
+            self.mass_residual(m);
+        }
+        // The slide's μ from its sliding side (fuse mode: the mean over the slip starts), else
+        // from the breakaway's μs (fuse mode: their mean) and the prior's ratio.
+        let mu = if mu_k.is_none() && at.mu_s.is_none() {
+            return None;
+        } else if self.fuse && self.slides.count() > 0 {
+            self.slides.mean()
+        } else if let Some(m) = mu_k {
+            m
+        } else if self.fuse {
+            at.mu_s_mean * self.mu_per_mu_s
+        } else {
+            at.mu_s.unwrap_or(f32::NAN) * self.mu_per_mu_s
+        };
         if !mu.is_finite() || level == 0 {
             return None;
         }
@@ -85,7 +128,7 @@ impl BaseTuning {
             mu
         };
         if self.fuse {
-            return (!adopted && self.plausible(mu as f64)).then_some(mu);
+            return (!at.adopted && self.plausible(mu as f64)).then_some(mu);
         }
         let i = if level > 0 { 0 } else { 1 };
         let own = self.mu_dir_std.get(i).is_some_and(|&s| s > 0.0);
@@ -119,37 +162,37 @@ mod tests {
     #[test]
     fn predict_takes_each_directions_slip_start() {
         let mut b = BaseTuning::new(params(), 10_000.0, false, false, 37).unwrap();
-        assert_eq!(b.slip_start(1, 0.25, false), None);
+        assert_eq!(start(&mut b, 1, 0.25, false), None);
         assert!(close(b.mu_for(1), 0.2 + W * 0.05), "{}", b.mu_for(1));
         assert_eq!(b.mu_dir_std[0], FROM_BREAKAWAY);
         assert_eq!(b.mu_for(-1), 0.2);
         assert_eq!(b.mu_at_event(1, 3.0), Some(b.mu_for(1)));
         // Within MIN_BREAKAWAY_CHANGE (5 %) of the prior: the prior.
-        b.slip_start(1, 0.209, false);
+        start(&mut b, 1, 0.209, false);
         assert_eq!(b.mu_for(1), 0.2);
         assert_eq!(b.mu_dir_std[0], 0.0, "the prior's");
-        b.slip_start(1, 0.15, false);
+        start(&mut b, 1, 0.15, false);
         assert!(close(b.mu_for(1), 0.2 - W * 0.05), "{}", b.mu_for(1));
         for mu in [0.8, f32::NAN, f32::INFINITY] {
-            b.slip_start(-1, mu, false);
+            start(&mut b, -1, mu, false);
             assert_eq!(b.mu_for(-1), 0.2, "{mu}");
         }
-        b.slip_start(-1, 0.25, true);
+        start(&mut b, -1, 0.25, true);
         assert!(
             close(b.mu_for(-1), 0.2 + W * 0.05),
             "adopted is fuse mode's"
         );
         b.mu_dir_std[1] = 1e-3;
-        b.slip_start(-1, 0.15, false);
+        start(&mut b, -1, 0.15, false);
         assert!(
             close(b.mu_for(-1), 0.2 + W * 0.05),
             "its own estimate stays"
         );
         // The other direction has its own estimate: the coefficient whole.
-        b.slip_start(1, 0.25, false);
+        start(&mut b, 1, 0.25, false);
         assert_eq!(b.mu_for(1), 0.25);
         b.mu_known = true;
-        b.slip_start(1, 0.3, false);
+        start(&mut b, 1, 0.3, false);
         assert_eq!(b.mu_for(1), 0.25, "μ known stays");
     }
 
@@ -160,15 +203,15 @@ mod tests {
     fn fuse_takes_the_mean_until_its_own_estimate() {
         let fuse = || BaseTuning::new(params(), 10_000.0, false, true, 37).unwrap();
         let mut b = fuse().with_static_friction(0.25);
-        let mu = b.slip_start(-1, 0.3, false).unwrap();
+        let mu = start(&mut b, -1, 0.3, false).unwrap();
         assert!((mu - 0.24).abs() < 1e-6, "{mu}");
         assert_eq!(b.mu_for(-1), 0.2, "predict mode's levels untouched");
-        assert_eq!(b.slip_start(1, 0.26, false), Some(0.2), "0.208: the prior");
-        assert_eq!(b.slip_start(1, 0.3, true), None);
-        assert_eq!(b.slip_start(1, 0.6, false), None);
-        assert_eq!(b.slip_start(0, 0.25, false), None);
+        assert_eq!(start(&mut b, 1, 0.26, false), Some(0.2), "0.208: the prior");
+        assert_eq!(start(&mut b, 1, 0.3, true), None);
+        assert_eq!(start(&mut b, 1, 0.6, false), None);
+        assert_eq!(start(&mut b, 0, 0.25, false), None);
         let mut b = fuse().with_static_friction(0.0);
-        assert_eq!(b.slip_start(1, 0.25, false), Some(0.25));
+        assert_eq!(start(&mut b, 1, 0.25, false), Some(0.25));
     }
 
     /// Predict mode: a one-way estimate known to 2 % replaces a slip start's level even when
@@ -176,7 +219,7 @@ mod tests {
     #[test]
     fn a_one_way_estimate_replaces_a_slip_starts_level() {
         let mut b = BaseTuning::new(params(), 10_000.0, false, false, 37).unwrap();
-        b.slip_start(1, 0.26, false);
+        start(&mut b, 1, 0.26, false);
         let level = b.mu_for(1);
         let g = params().gravity_m_s2;
         let e = |mu: f64| SlidingEstimate {
@@ -201,6 +244,54 @@ mod tests {
         let (_, mu) = b.adopt_one_way(&e(0.202));
         assert_eq!(mu, None);
         assert_eq!(b.mu_for(1), 0.2);
+    }
+
+    /// The slide's coefficient from the sliding side is taken as it is (predict mode, blended
+    /// with the prior's as before the other direction's estimate) and as the mean over the
+    /// slip starts (fuse mode), whatever μs and the prior's μ/μs; without it, μs times the ratio.
+    #[test]
+    fn the_sliding_side_comes_before_the_breakaway() {
+        let at = |level: i8, mu_s: f32, mu_k: Option<f32>| super::SlipStart {
+            level,
+            mu_s: Some(mu_s),
+            mu_s_mean: mu_s,
+            mu_k,
+            adopted: false,
+        };
+        let mut b = BaseTuning::new(params(), 10_000.0, false, false, 37)
+            .unwrap()
+            .with_static_friction(0.25);
+        b.slip_start(&at(1, 0.3, Some(0.26)));
+        assert!(close(b.mu_for(1), 0.2 + W * 0.06), "{}", b.mu_for(1));
+        b.slip_start(&at(-1, 0.3, None));
+        assert!(close(b.mu_for(-1), 0.2 + W * 0.04), "0.3·0.8: {}", b.mu_for(-1));
+        let mut b = BaseTuning::new(params(), 10_000.0, false, true, 37)
+            .unwrap()
+            .with_static_friction(0.25);
+        assert_eq!(b.slip_start(&at(1, 0.3, Some(0.26))), Some(0.26));
+        let mu = b.slip_start(&at(-1, 0.35, Some(0.28))).unwrap();
+        assert!(close(mu, 0.27), "{mu}");
+        // One without its sliding side: the mean of those with one.
+        let mu = b.slip_start(&at(1, 0.35, None)).unwrap();
+        assert!(close(mu, 0.27), "{mu}");
+        assert_eq!(
+            b.slip_start(&super::SlipStart {
+                mu_s: None,
+                ..at(1, 0.0, None)
+            }),
+            None
+        );
+    }
+
+    /// A slip start with its breakaway coefficient only (also the fuse mode's mean).
+    fn start(b: &mut BaseTuning, level: i8, mu_s: f32, adopted: bool) -> Option<f32> {
+        b.slip_start(&super::SlipStart {
+            level,
+            mu_s: Some(mu_s),
+            mu_s_mean: mu_s,
+            mu_k: None,
+            adopted,
+        })
     }
 
     fn close(a: f32, b: f32) -> bool {

@@ -43,8 +43,10 @@ use ssvr_core::StructureParams;
 
 mod blocks;
 mod first_slides;
+mod mass;
 use first_slides::FROM_BREAKAWAY;
-pub use first_slides::PREDICT_BREAKAWAY_WEIGHT;
+pub use first_slides::{SlipStart, PREDICT_BREAKAWAY_WEIGHT};
+use mass::MassFit;
 mod slot;
 mod top;
 
@@ -95,7 +97,41 @@ pub const MIN_REL_CHANGE_MU: f64 = 1e-4;
 
 /// The identification from the sliding base of either mode (module documentation).
 #[derive(Debug, Clone)]
+#[repr(C)]
 pub struct BaseTuning {
+    /// The block being summed.
+    cur: Block,
+    cur_n: u32,
+    /// Samples per block, and its inverse.
+    d: u32,
+    inv_d: f32,
+    skip: u8,
+    /// The phase level of the samples to come, and how many of them the guard drops.
+    level: i8,
+    /// The table accelerometer's offset in use (m/s²): what the identification finds on the
+    /// base accelerometer, whose offset relative to the table's the detector removes.
+    offset: f32,
+    r: f32,
+    g: f32,
+    /// The friction coefficient of each direction of the friction force (s = +1, −1) in use:
+    /// μ, or until the base has slid both ways without a rest, that direction's one-way
+    /// estimate (the offset in it), with its standard deviation (0: the prior's;
+    /// `FROM_BREAKAWAY`: a slip start's breakaway, [`Self::slip_start`]).
+    mu_dir: [f32; 2],
+    mu_use: f32,
+    /// The top accelerometer's offset in use (m/s²) and its standard deviation.
+    top_offset: f32,
+    /// 1/G of the top accelerometer's gain G relative to the base's in use, and G's standard
+    /// deviation.
+    top_scale: f32,
+    countdown: u32,
+    /// Fuse mode: only the offsets (the top accelerometer's from `top_fit`).
+    fuse: bool,
+    zeroed: bool,
+    /// μ is known from both directions (adopted, or the one in use confirmed).
+    mu_known: bool,
+    /// Fuse mode without a rest: the top offset from the first samples ([`OpenStart`]).
+    start: OpenStart,
     id: SlidingIdentifier<f32>,
     /// The blocks waiting for late events (`at`: the slot of the next, `filled` of them), in
     /// the first `wait` slots: the blocks that cover the detector's longest delay.
@@ -103,27 +139,10 @@ pub struct BaseTuning {
     wait: usize,
     at: usize,
     filled: usize,
-    /// The block being summed.
-    cur: Block,
-    cur_n: u32,
-    /// Samples per block, and its inverse.
-    d: u32,
-    inv_d: f32,
-    /// The phase level of the samples to come, and how many of them the guard drops.
-    level: i8,
-    skip: u8,
     adoption: Adoption,
     /// √M of the prior; r = m2/m1; g.
     root_m: f64,
-    r: f32,
-    g: f32,
     prior_mu: f64,
-    mu_use: f32,
-    /// The friction coefficient of each direction of the friction force (s = +1, −1) in use:
-    /// μ, or until the base has slid both ways without a rest, that direction's one-way
-    /// estimate (the offset in it), with its standard deviation (0: the prior's;
-    /// `FROM_BREAKAWAY`: a slip start's breakaway, [`Self::slip_start`]).
-    mu_dir: [f32; 2],
     mu_dir_std: [f64; 2],
     /// The standard deviation of the μ in use (0: the prior's, replaced only by a μ̂ that
     /// differs from it significantly).
@@ -135,30 +154,19 @@ pub struct BaseTuning {
     rows_seen: u32,
     /// Estimates left at the first checks' interval.
     fast_checks: u8,
-    /// The table accelerometer's offset in use (m/s²): what the identification finds on the
-    /// base accelerometer, whose offset relative to the table's the detector removes.
-    offset: f32,
-    countdown: u32,
     last: Option<SlidingEstimate>,
-    zeroed: bool,
-    /// Fuse mode: only the offsets (the top accelerometer's from `top_fit`).
-    fuse: bool,
     /// The measured top acceleration against (base, s, 1) while sliding.
     top_fit: PagedNormal<f32, 3, 10>,
-    /// The top accelerometer's offset in use (m/s²) and its standard deviation.
-    top_offset: f32,
     top_offset_std_use: f64,
-    /// Fuse mode without a rest: the top offset from the first samples ([`OpenStart`]).
-    start: OpenStart,
-    /// 1/G of the top accelerometer's gain G relative to the base's in use, and G's standard
-    /// deviation.
-    top_scale: f32,
     top_gain_std_use: f64,
-    /// μ is known from both directions (adopted, or the one in use confirmed).
-    mu_known: bool,
+    /// Predict mode: M from the slip starts' residuals ([`Self::m1_in_use`]), and the prior's M.
+    mass: MassFit,
+    prior_root_m: f32,
     /// The prior's μ/μs: a slip start's breakaway coefficient times it is the slide's μ
     /// ([`Self::slip_start`]).
     mu_per_mu_s: f32,
+    /// The slip starts' kinetic coefficients from their sliding sides (fuse mode: their mean).
+    slides: super::Breakaways,
 }
 
 /// A block of samples: base and top sums (averages once closed), its phase level (0: not to
@@ -218,6 +226,7 @@ impl BaseTuning {
             mu_dir_std: [0.0; 2],
             mu_known: false,
             mu_per_mu_s: 1.0,
+            slides: super::Breakaways::default(),
             mu_std_use: 0.0,
             offset_std_use: 0.0,
             mu_adoptions: 0,
@@ -234,6 +243,8 @@ impl BaseTuning {
             start: OpenStart::new(fuse && !zeroed, &params, rate),
             top_scale: 1.0,
             top_gain_std_use: 0.0,
+            mass: MassFit::default(),
+            prior_root_m: root_m as f32,
             id,
         })
     }
@@ -309,6 +320,10 @@ impl BaseTuning {
         } else {
             CHECK_EVERY
         };
+        // (Predict mode: a new M from the slip starts first.)
+        if let Some(c) = self.take_mass() {
+            return (Some(c), None);
+        }
         let rows = self.id.rows_added().wrapping_add(self.top_fit.added());
         if rows == self.rows_seen {
             return (None, None);
