@@ -28,7 +28,15 @@ pub type StickSlipF32<const H: usize> = StickSlipEstimator<f32, F32Poly, H>;
 /// velocity-dependent friction law ([`FrictionSlot`]; `()` for the fixed-base model), `B` the
 /// predict mode's tuning from the base accelerometer ([`BaseSlot`]; `()` for the fixed-base
 /// model and under a velocity-dependent law).
+///
+/// (`repr(C)`: the fields in the order written, the estimator's state first and the base
+/// tuning, whose cold part is large, last; the small fields together, with no padding between
+/// them, for the fixed-base image's 8 KiB of RAM (8 184 B). The M4F's loads reach ±1020 B from a
+/// base register for floats, so where the compiler puts the per-sample fields moves the
+/// per-sample count: with rustc's own order a base tuning 40 B larger took the fuse mode from
+/// 251.7 to 266.0 instructions; laid out so, 252.0; docs/PERFORMANCE.md.)
 #[derive(Debug, Clone)]
+#[repr(C)]
 pub struct StickSlipModel<
     const H: usize,
     const EVENTS: bool = true,
@@ -36,21 +44,21 @@ pub struct StickSlipModel<
     B: BaseSlot = Option<BaseTuning>,
 > {
     est: StickSlipF32<H>,
-    max_age: f32,
+    /// f and ξ identified and adopted online (fuse mode), with the top accelerometer's gain
+    /// beside a [`BaseTuning`] (which corrects the top by it).
+    tuning: Option<Tuning<B::TopGain>>,
     table: [f32; BATCH],
     top: [f32; BATCH],
     /// The base acceleration (for the tuning).
     base: [f32; BATCH],
-    /// f and ξ identified and adopted online (fuse mode), with the top accelerometer's gain
-    /// beside a [`BaseTuning`] (which corrects the top by it).
-    tuning: Option<Tuning<B::TopGain>>,
-    /// Fuse mode: the breakaway coefficients read the measured top acceleration (else the
-    /// model's own).
-    fuse: bool,
+    max_age: f32,
     breakaways: Breakaways,
     /// The slip acceleration on the sliding side of the slip start to push (the detector's,
     /// noted with its sample).
     start_accel: f32,
+    /// Fuse mode: the breakaway coefficients read the measured top acceleration (else the
+    /// model's own).
+    fuse: bool,
     /// A velocity-dependent friction law (None: Coulomb).
     friction: F,
     /// The identification from the sliding base ([`BaseTuning`]): predict mode's f, ξ, μ and

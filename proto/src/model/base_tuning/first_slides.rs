@@ -264,7 +264,11 @@ mod tests {
         b.slip_start(&at(1, 0.3, Some(0.26)));
         assert!(close(b.mu_for(1), 0.2 + W * 0.06), "{}", b.mu_for(1));
         b.slip_start(&at(-1, 0.3, None));
-        assert!(close(b.mu_for(-1), 0.2 + W * 0.04), "0.3·0.8: {}", b.mu_for(-1));
+        assert!(
+            close(b.mu_for(-1), 0.2 + W * 0.04),
+            "0.3·0.8: {}",
+            b.mu_for(-1)
+        );
         let mut b = BaseTuning::new(params(), 10_000.0, false, true, 37)
             .unwrap()
             .with_static_friction(0.25);

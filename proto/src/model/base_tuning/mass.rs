@@ -18,10 +18,15 @@
 //! first step with the default scene's slope, ρ ≈ −[`FIRST_SLOPE`]·δM/M, then secant steps,
 //! each at most [`MAX_STEP`] of M, M within [`MAX_CHANGE`] of the prior's. A mean within 3σ,
 //! or within [`DEAD_BAND`], of 0 changes nothing. The slip starts of the first stuck phases
-//! after a change ([`SETTLE`]) ran partly on the old p and are not counted. A residual that
-//! does not follow a step (a secant slope below a tenth of the first's, or of the wrong sign)
-//! is not p's error (a μ in use that is off puts a constant in it). M then goes back to where it
-//! was before the step, and the fit stops.
+//! after a change ([`SETTLE`]) ran partly on the old p and are not counted. The window's
+//! mean leaves out the residual farthest from its median ([`trimmed`]). A residual that moved
+//! beyond its noise after a step, but the wrong way (a secant slope below a tenth of the
+//! first's, or of the wrong sign), is not p's error: M then goes back to where it was before
+//! the step, and the fit stops. One that did not move beyond its noise takes the first slope
+//! again (on El Centro the windows' means scatter by ~2 %, more than their standard errors
+//! say: a secant there went the wrong way by chance and stopped the fit at M 2 % high, 6.2 %
+//! RMS with everything combined, 1.8 % now). A residual that stays whatever M is (none is
+//! known now that the residual needs no μs) would take M to [`MAX_CHANGE`].
 
 use super::BaseTuning;
 use ssvr_core::stick_slip::StickSlipCoefficients;
@@ -50,10 +55,10 @@ pub(super) struct MassFit {
     skip: u8,
     /// The residual did not follow M: the fit is over.
     stopped: bool,
-    sum: f32,
-    sum2: f32,
-    /// The previous step's ln M and mean residual (NaN: none).
-    prev: (f32, f32),
+    /// The window's residuals.
+    rho: [f32; SLIP_STARTS as usize],
+    /// The previous step's ln M, mean residual and its standard error (NaN: none).
+    prev: (f32, f32, f32),
     /// A new M to hand out at the next check (0: none).
     pending: f32,
 }
@@ -64,12 +69,56 @@ impl Default for MassFit {
             n: 0,
             skip: 0,
             stopped: false,
-            sum: 0.0,
-            sum2: 0.0,
-            prev: (f32::NAN, f32::NAN),
+            rho: [0.0; SLIP_STARTS as usize],
+            prev: (f32::NAN, f32::NAN, f32::NAN),
             pending: 0.0,
         }
     }
+}
+
+/// The mean of a window's residuals without the one farthest from their median, and its
+/// standard error: one slip start whose ü1 is off for another reason (on El Centro with m1 told
+/// 5 % high, the first window read −3.6, −4.1, −5.8, −7.5, +8.4 and −6.2 %: a mean of −3.1 %
+/// within 3σ of 0, −5.4 ± 0.7 % without the +8.4) does not hold the step back a window.
+fn trimmed(rho: &[f32; SLIP_STARTS as usize]) -> (f64, f64) {
+    // (Insertion sort: six values.)
+    let mut sorted = *rho;
+    for i in 1..sorted.len() {
+        let mut j = i;
+        while j > 0 {
+            match (sorted.get(j - 1), sorted.get(j)) {
+                (Some(&a), Some(&b)) if a > b => sorted.swap(j - 1, j),
+                _ => break,
+            }
+            j -= 1;
+        }
+    }
+    let half = sorted.len() / 2;
+    let median = match (sorted.get(half.wrapping_sub(1)), sorted.get(half)) {
+        (Some(&a), Some(&b)) => 0.5 * (f64::from(a) + f64::from(b)),
+        _ => return (f64::NAN, f64::NAN),
+    };
+    let far = rho
+        .iter()
+        .enumerate()
+        .max_by(|a, b| {
+            let da = libm::fabs(f64::from(*a.1) - median);
+            let db = libm::fabs(f64::from(*b.1) - median);
+            da.total_cmp(&db)
+        })
+        .map_or(usize::MAX, |(i, _)| i);
+    let (mut n, mut sum, mut sum2) = (0.0f64, 0.0f64, 0.0f64);
+    for (i, &r) in rho.iter().enumerate() {
+        if i != far {
+            let r = f64::from(r);
+            n += 1.0;
+            sum += r;
+            sum2 += r * r;
+        }
+    }
+    let mean = sum / n;
+    let var = ((sum2 - sum * mean) / (n - 1.0)).max(0.0);
+    (mean, libm::sqrt(var / n))
 }
 
 impl BaseTuning {
@@ -92,33 +141,36 @@ impl BaseTuning {
         if !rho.is_finite() {
             return;
         }
+        if let Some(r) = fit.rho.get_mut(usize::from(fit.n)) {
+            *r = rho;
+        }
         fit.n = fit.n.saturating_add(1);
-        fit.sum += rho;
-        fit.sum2 += rho * rho;
         if u32::from(fit.n) < SLIP_STARTS {
             return;
         }
-        let n = f64::from(fit.n);
-        let (sum, sum2) = (f64::from(fit.sum), f64::from(fit.sum2));
-        let mean = sum / n;
-        let var = ((sum2 - sum * mean) / (n - 1.0)).max(0.0);
-        let sd = libm::sqrt(var / n);
-        (fit.n, fit.sum, fit.sum2) = (0, 0.0, 0.0);
+        fit.n = 0;
+        let (mean, sd) = trimmed(&fit.rho);
         if libm::fabs(mean) <= DEAD_BAND.max(3.0 * sd) {
             return;
         }
         let ln_m = 2.0 * libm::log(self.root_m);
-        let (l0, r0) = (f64::from(fit.prev.0), f64::from(fit.prev.1));
-        // The secant's slope (none before the first step: NaN).
+        let (l0, r0, s0) = (
+            f64::from(fit.prev.0),
+            f64::from(fit.prev.1),
+            f64::from(fit.prev.2),
+        );
+        // The secant's slope, when the residual moved beyond its noise since the last step
+        // (NaN before the first step: the first slope then).
         let secant = -(mean - r0) / (ln_m - l0);
-        if secant <= 0.1 * FIRST_SLOPE {
-            // The residual did not follow the last step (or went the wrong way): it is not
-            // p's error (μs/μ told wrong, say). Back to the M before the step, and no more.
+        let moved = libm::fabs(mean - r0) > 3.0 * libm::sqrt(sd * sd + s0 * s0);
+        if moved && secant <= 0.1 * FIRST_SLOPE {
+            // The residual went the wrong way after the last step, or stayed: it is not p's
+            // error. Back to the M before the step, and no more.
             fit.stopped = true;
             fit.pending = libm::exp(l0) as f32;
             return;
         }
-        let slope = if secant < 10.0 * FIRST_SLOPE {
+        let slope = if moved && secant < 10.0 * FIRST_SLOPE {
             secant
         } else {
             FIRST_SLOPE
@@ -126,7 +178,7 @@ impl BaseTuning {
         let step = (mean / slope).clamp(-MAX_STEP, MAX_STEP);
         let ln_prior = 2.0 * libm::log(f64::from(self.prior_root_m));
         let ln_new = (ln_m + step).clamp(ln_prior - MAX_CHANGE, ln_prior + MAX_CHANGE);
-        fit.prev = (ln_m as f32, mean as f32);
+        fit.prev = (ln_m as f32, mean as f32, sd as f32);
         fit.pending = libm::exp(ln_new) as f32;
         fit.skip = SETTLE as u8;
     }
@@ -251,6 +303,16 @@ mod tests {
         assert!(b.take_mass().is_none());
     }
 
+    /// The trimmed mean of El Centro's first window (m1 told 5 % high): the +8.4 % left out.
+    #[test]
+    fn one_slip_start_off_does_not_hold_the_window() {
+        let (mean, sd) = super::trimmed(&[-0.0362, -0.0407, -0.0576, -0.0747, 0.0837, -0.0615]);
+        assert!((mean + 0.05414).abs() < 1e-5, "{mean}");
+        assert!((sd - 0.0070).abs() < 2e-4, "{sd}");
+        let (mean, sd) = super::trimmed(&[0.01; 6]);
+        assert!((mean - 0.01).abs() < 1e-9 && sd < 1e-9, "{mean} {sd}");
+    }
+
     /// The secant finds the root of a residual linear in ln M with another slope than the first
     /// step's (ρ = −3·ln(M/M*), M* 4 % below the prior's): within the dead band in a few steps,
     /// each step at most MAX_STEP; M stays within MAX_CHANGE of the prior's.
@@ -278,12 +340,14 @@ mod tests {
             libm::fabs(rho) < 0.01 && steps <= 4,
             "{steps} steps, residual {rho}"
         );
-        // A residual that does not follow M (not p's error): one step, back, and no more.
+        // A residual that goes the wrong way after a step (not p's error): one step, back,
+        // and no more.
         let mut b = tuning();
         let m0 = 1.0 + 29.5 / 1.75;
         let mut moved = 0;
-        for _ in 0..20 * (SETTLE + SLIP_STARTS) {
-            slide(&mut b, 1, 0.25, false);
+        for k in 0..20 * (SETTLE + SLIP_STARTS) {
+            let mu = if k < SETTLE + SLIP_STARTS { 0.19 } else { 0.18 };
+            slide(&mut b, 1, mu, false);
             if b.check(u32::MAX).0.is_some() {
                 moved += 1;
             }
@@ -291,5 +355,13 @@ mod tests {
         let m = 1.0 + b.m1_in_use() / 1.75;
         assert_eq!(moved, 2, "a step and back");
         assert!((m / m0 - 1.0).abs() < 1e-6, "{m}");
+        // One that stays where it is, as noisy as it is: steps of MAX_STEP up to MAX_CHANGE.
+        let mut b = tuning();
+        for k in 0..20 * (SETTLE + SLIP_STARTS) {
+            slide(&mut b, 1, if k % 2 == 0 { 0.23 } else { 0.27 }, false);
+            b.check(u32::MAX);
+        }
+        let m = 1.0 + b.m1_in_use() / 1.75;
+        assert!((libm::log(m / m0) - super::MAX_CHANGE).abs() < 1e-6, "{m}");
     }
 }

@@ -96,6 +96,9 @@ pub const MAX_REL_STD_MU_OFFSET: f64 = 5e-2;
 pub const MIN_REL_CHANGE_MU: f64 = 1e-4;
 
 /// The identification from the sliding base of either mode (module documentation).
+///
+/// (`repr(C)`: the fields the samples' path reads first, in the order written, the large
+/// identifiers and rings after them: see [`StickSlipModel`](super::StickSlipModel).)
 #[derive(Debug, Clone)]
 #[repr(C)]
 pub struct BaseTuning {
