@@ -8,7 +8,7 @@ use crate::scene::Scene;
 use crate::sensors::{SensorFrame, FLAG_ACCEL_SATURATED, FLAG_DISP_SATURATED, FLAG_MISSING};
 use anyhow::{anyhow, bail, Result};
 use ssvr_core::detect::displacement::SlipEvent;
-use ssvr_proto::pipeline::model_inputs;
+use ssvr_proto::pipeline::{model_inputs, slip_start_input};
 use ssvr_proto::plan::MAX_HISTORY;
 use ssvr_proto::{
     flags, AccelerationDetector, DetectorPlan, DisplacementDetector, EventDetector, EventSource,
@@ -194,7 +194,11 @@ pub fn input_tracker(plan: &Plan) -> Result<InputTracker> {
             model_inputs(ch, f, tracked, gain.as_mut(), index, event.as_ref());
             index = index.wrapping_add(1);
             // A slip start's sliding side at its start (the pipeline notes it for the model).
-            matches!(event, Some(SlipEvent::SlipStart { .. })).then(|| d.slip_start_accel())
+            let inverse = gain
+                .as_ref()
+                .map_or(1.0, ssvr_proto::table_gain::TableGain::inverse);
+            matches!(event, Some(SlipEvent::SlipStart { .. }))
+                .then(|| slip_start_input(d.slip_start_accel(), tracked.1, inverse))
         }))
     }
     macro_rules! rings {

@@ -210,7 +210,7 @@ fn predict_identifies_f_and_xi_from_the_base_accelerometer() {
 /// the dead band of 1 % (`proto::model::base_tuning::mass`), f and ξ rescaled with ω and ζ held.
 /// Measured on these 3 s of the default scene: f̂ 2.1e-4 / 8.5e-4 off 7 Hz at the end (6.84 /
 /// 7.17 Hz from the prior's M; the dead band allows ~4e-3), RMS 0.84 / 0.95 % of the peak,
-/// 0.038 / 0.090 % after 2 s (over 10 s: 0.46 / 0.53 %, 1.99 / 2.08 % before).
+/// 0.038 / 0.090 % after 2 s (over 10 s: 0.46 / 0.52 %, 1.99 / 2.08 % before).
 #[test]
 fn predict_finds_m_from_the_slip_starts() {
     for m1 in [1.05, 0.95] {

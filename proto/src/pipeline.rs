@@ -68,6 +68,16 @@ pub fn model_inputs(
     }
 }
 
+/// A detected slip start's sliding side (`slip_accel`, the detector's
+/// [`EventDetector::slip_start_accel`]) in the units the model reads after [`model_inputs`]: the
+/// detector's slip acceleration is the base accelerometer's units (the gain mismatch `k` to the
+/// table's removed from the table's share, not from the base's), so divided by 1 + k, and
+/// multiplied by the table gain's `inverse` (1 without one) as the accelerometers are.
+#[inline(always)]
+pub fn slip_start_input(slip_accel: f32, k: f32, inverse: f32) -> f32 {
+    slip_accel / (1.0 + k) * inverse
+}
+
 /// Steps 2–3 of [`model_inputs`].
 #[inline(always)]
 fn table_gain_step(
@@ -202,23 +212,37 @@ impl<M: Model, D: EventDetector, G: GainSlot> Pipeline<M, D, G> {
     /// `samples` is ignored) into `frames`. Returns the number of frames written. Never panics.
     pub fn step_batch(&mut self, samples: &[Sample], frames: &mut [Frame]) -> usize {
         let (mut n, mut events) = (0, 0u32);
+        // The slip starts' sliding sides, in order, for their pushes (a batch may hold two; a
+        // third, were there one, would go without: the breakaway's μ instead).
+        let (mut starts, mut noted) = ([f32::NAN; 2], 0usize);
         for (s, fr) in samples.iter().zip(frames.iter_mut()).take(BATCH) {
             let channels;
             (*fr, channels) = self.detect(s);
             if let Some(e) = &fr.event {
                 events |= 1 << n;
                 if e.kind == EventKind::SlipStart {
-                    // (A batch holds one slip start at most: a stick comes between two.)
-                    self.model.note_slip_start(self.detector.slip_start_accel());
+                    if let Some(a) = starts.get_mut(noted) {
+                        *a = slip_start_input(
+                            self.detector.slip_start_accel(),
+                            self.detector.gain_mismatch(),
+                            self.gain.get().map_or(1.0, TableGain::inverse),
+                        );
+                    }
+                    noted += 1;
                 }
             }
             self.model.note_inputs(n, &channels, fr.flags);
             n += 1;
         }
-        let mut i = 0;
+        let (mut i, mut pushed) = (0, 0usize);
         while i < n {
             if let Some(fr) = frames.get_mut(i) {
                 if let Some(e) = fr.event {
+                    if e.kind == EventKind::SlipStart {
+                        let a = starts.get(pushed).copied().unwrap_or(f32::NAN);
+                        self.model.note_slip_start(a);
+                        pushed += 1;
+                    }
                     fr.flags |= self.push(&e);
                 }
             }
@@ -404,5 +428,25 @@ impl<M: Model, D: EventDetector, G: GainSlot> Step for Pipeline<M, D, G> {
     }
     fn friction_law(&self) -> Option<crate::model::FrictionReport> {
         self.model.friction_law()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    /// A slip start's sliding side in the model's units: accelerometers with gains 1 + e_b (base)
+    /// and 1 + e_t (table), a true slip acceleration of 2 m/s² on a table at 1 m/s². The
+    /// detector's s̈ (base − table less k times the table, k = (e_b − e_t)/(1 + e_t)) comes out
+    /// (1 + e_b)·2; the model reads (base/(1 + k) − table)/(1 + e_t) = 2; so must the slip start's.
+    #[test]
+    fn a_slip_starts_sliding_side_is_in_the_models_units() {
+        let (e_b, e_t) = (0.01f32, -0.01f32);
+        let (base, table) = ((1.0 + e_b) * 3.0, (1.0 + e_t) * 1.0);
+        let k = (e_b - e_t) / (1.0 + e_t);
+        let detector = base - table - k * table;
+        let inverse = 1.0 / (1.0 + e_t);
+        let model = (base / (1.0 + k) - table) * inverse;
+        assert!((model - 2.0).abs() < 1e-6, "{model}");
+        let got = super::slip_start_input(detector, k, inverse);
+        assert!((got - 2.0).abs() < 1e-6, "{got}");
     }
 }

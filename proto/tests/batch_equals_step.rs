@@ -244,3 +244,104 @@ fn a_model_type_refuses_another_models_plan() {
     assert!(DisplacementDetector::<256>::from_plan(&plan).is_err());
     assert!(AccelerationDetector::<128>::from_plan(&plan).is_err());
 }
+
+/// Two slip starts in one batch (a slip, a stick and a slip within 16 samples: seen at 1 kHz):
+/// each push gets its own slip start's sliding side, noted right before it, in batches as one
+/// sample at a time. A detector that scripts the events and a model that records what it gets.
+#[test]
+fn two_slip_starts_in_a_batch_keep_their_own_sliding_sides() {
+    use ssvr_core::detect::displacement::SlipEvent;
+
+    #[derive(Debug, Clone, Default)]
+    struct Script {
+        k: u32,
+    }
+    impl EventDetector for Script {
+        const INPUT: ssvr_proto::DetectorInput = ssvr_proto::DetectorInput::SlipAcceleration;
+        fn from_plan(_: &Plan) -> Result<Self, ssvr_proto::PlanError> {
+            Ok(Self::default())
+        }
+        fn process(&mut self, _: f32) -> Option<SlipEvent> {
+            self.k += 1;
+            match self.k - 1 {
+                3 | 11 | 20 => Some(SlipEvent::SlipStart {
+                    direction: 1,
+                    age_samples: 0.5,
+                }),
+                7 | 15 => Some(SlipEvent::Stick { age_samples: 0.5 }),
+                _ => None,
+            }
+        }
+        fn max_age_samples(&self) -> usize {
+            8
+        }
+        fn slip_start_accel(&self) -> f32 {
+            // The sample it was found at, so that each push shows whose it got.
+            (self.k - 1) as f32
+        }
+    }
+
+    #[derive(Debug, Clone, Default)]
+    struct Record {
+        noted: f32,
+        got: Vec<(ssvr_proto::EventKind, f32)>,
+    }
+    impl Model for Record {
+        fn kind(&self) -> ModelKind {
+            ModelKind::StickSlip
+        }
+        fn push(&mut self, e: &ssvr_proto::Event) -> Result<ssvr_proto::Pushed, ssvr_core::Error> {
+            self.got.push((e.kind, self.noted));
+            self.noted = f32::NAN;
+            Ok(ssvr_proto::Pushed::Yes)
+        }
+        fn note_slip_start(&mut self, slip_accel: f32) {
+            self.noted = slip_accel;
+        }
+        fn note_inputs(&mut self, _: usize, _: &[f32; ssvr_proto::CHANNELS], _: u8) {}
+        fn predict_run(&mut self, _: &mut [Frame], _: usize) {}
+        fn mu_estimate(&self) -> Option<ssvr_core::stick_slip::MuEstimate> {
+            None
+        }
+        fn revised(&self, _: u64) -> Option<f32> {
+            None
+        }
+    }
+
+    let samples: Vec<Sample> = (0..2 * BATCH).map(sample).collect();
+    let new = || {
+        Pipeline::<Record, Script, ()>::new(
+            Record {
+                noted: f32::NAN,
+                ..Record::default()
+            },
+            Script::default(),
+            EventSource::Detector,
+            0.05,
+        )
+    };
+    let mut batched = new();
+    let mut frames = [Frame::EMPTY; BATCH];
+    for chunk in samples.chunks(BATCH) {
+        batched.step_batch(chunk, &mut frames);
+    }
+    let mut single = new();
+    for s in &samples {
+        single.step(s);
+    }
+    use ssvr_proto::EventKind::{SlipStart, Stick};
+    let want = [
+        (SlipStart, 3.0),
+        (Stick, f32::NAN),
+        (SlipStart, 11.0),
+        (Stick, f32::NAN),
+        (SlipStart, 20.0),
+    ];
+    for got in [&batched.model().got, &single.model().got] {
+        assert_eq!(got.len(), want.len(), "{got:?}");
+        for ((k, a), (wk, wa)) in got.iter().zip(want) {
+            assert_eq!(*k, wk);
+            assert!(a == &wa || (a.is_nan() && wa.is_nan()), "{got:?}");
+        }
+    }
+}

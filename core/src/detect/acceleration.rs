@@ -192,16 +192,20 @@ pub struct PhaseDetector<const N: usize> {
     /// acceleration less it, so that an offset of the table accelerometer is not mistaken for
     /// excitation (the rest of that offset's share is in the tracked offset).
     table_zero: f32,
-    /// The last slip start's sliding side at its start time: s̈ of a line through its first
-    /// samples above the threshold, extrapolated back (m/s²; NaN before any).
+    /// The last slip start's sliding side at its start time: s̈ of the parabola (or line)
+    /// through its first samples above the threshold, extrapolated back (m/s²; NaN before any).
     start_accel: f32,
 }
 
-/// Samples from the first one above the threshold in the line that gives a slip start's
-/// sliding side at its start ([`PhaseDetector::slip_start_accel`]): three keep the line's noise
-/// low when it is extrapolated over the samples of a ramp start (at 10 kHz, ~10) and its
-/// curvature small at 1 kHz (the sliding oscillation turns 0.19 rad per sample there).
+/// Samples from the first one above the threshold that give a slip start's sliding side at its
+/// start ([`PhaseDetector::slip_start_accel`]): three, for the parabola through them (the
+/// sliding oscillation's curvature: it turns 0.19 rad per sample at 1 kHz), or the line when
+/// the first is far from the start (a ramp start: its noise stays low extrapolated back).
 pub const START_LINE_SAMPLES: u64 = 3;
+const _: () = assert!(
+    START_LINE_SAMPLES == 3,
+    "the parabola is through three samples"
+);
 
 /// The first of them within this many samples of the start: the parabola through the three
 /// ([`PhaseDetector::slip_start_accel`]).
@@ -275,8 +279,10 @@ impl<const N: usize> PhaseDetector<N> {
     }
 
     /// The last slip start's slip acceleration on its sliding side at its start time (m/s²;
-    /// NaN before any): its first [`START_LINE_SAMPLES`] samples above the threshold, a
-    /// least-squares line extrapolated back to the start. The slip acceleration is zero before
+    /// NaN before any): its first [`START_LINE_SAMPLES`] samples above the threshold, the
+    /// parabola through them (the first within [`START_PARABOLA_SAMPLES`] of the start) or
+    /// their least-squares line (further; the line through two when only two are in),
+    /// extrapolated back to the start. The slip acceleration is zero before
     /// the start and jumps there by (μs − μ)·(m1 + m2)·g/m2 toward the sliding direction (a
     /// Coulomb interface): with the table's acceleration and the top's at the start, it gives
     /// the kinetic friction of the slide from the momentum balance, whatever μs is. Read it
@@ -631,7 +637,7 @@ impl<const N: usize> PhaseDetector<N> {
     /// The sliding side's s̈ at the time `tb` (relative to the current sample k) from the samples
     /// p.. ([`START_LINE_SAMPLES`] of them, up to k): the parabola through three when the first
     /// is within [`START_PARABOLA_SAMPLES`] of `tb` (the sliding oscillation's curvature: at
-    /// 1 kHz a line took μ 0.5 % low), else the least-squares line (the parabola's noise grows
+    /// 1 kHz a line took the slide's μ ~1 % low), else the least-squares line (the parabola's noise grows
     /// with the distance: 10× the samples' at 2, 43× at 5); NaN with fewer than two.
     fn start_line(&self, p: u64, k: u64, tb: f32) -> f32 {
         let end = k.min(p + START_LINE_SAMPLES - 1);
@@ -757,8 +763,8 @@ mod tests {
     /// A slip start's sliding side at its start ([`PhaseDetector::slip_start_accel`]): 0 for a
     /// ramp start (equal static and kinetic friction), the jump for a jump start, whether the
     /// detector is told to expect the jump or not (told: the start is timed mid-sample, the
-    /// ramp's slope times half a sample off, measured 3e-3 at most; not told: ~2 samples early,
-    /// 0.022); NaN before any.
+    /// ramp's slope times half a sample off, measured 5.0e-3 at most; not told: ~2 samples
+    /// early, 0.022); NaN before any.
     #[test]
     fn slip_start_accel_is_the_sliding_side() {
         let run = |cfg: PhaseDetectorConfig, jump: f64, slope: f64, tb: f64| {
@@ -783,6 +789,13 @@ mod tests {
             assert!((a + 8.75).abs() < 6e-3, "jump at {tb}: {a}");
             let a = run(ramp, 8.75, 0.01, tb);
             assert!((a + 8.75).abs() < 0.03, "untold jump at {tb}: {a}");
+            // Confirmed after two samples: the line through them.
+            let two = PhaseDetectorConfig {
+                confirm_samples: 2,
+                ..jump
+            };
+            let a = run(two, 8.75, 0.01, tb);
+            assert!((a + 8.75).abs() < 6e-3, "two samples at {tb}: {a}");
         }
     }
 

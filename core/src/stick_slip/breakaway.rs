@@ -5,7 +5,7 @@
 //!
 //! Just after the start the base slides: m2·ü2 + m1·ü1 = −μ·(m1 + m2)·g·s, so the kinetic
 //! μ = |(M − 1)·ü1 + ü2| / (M·g) with ü2 = üg + s̈ the base's acceleration on the sliding side,
-//! s̈ the slip acceleration there (a detector's line through the first sliding samples,
+//! s̈ the slip acceleration there (a detector's parabola through the first sliding samples,
 //! extrapolated back to the start: ü1 is continuous, ü2 jumps by (μs − μ)·M·g). That needs no
 //! μs ([`StickSlipEstimator::slide_coefficient`]).
 

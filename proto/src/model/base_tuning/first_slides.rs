@@ -25,7 +25,7 @@
 //! The kinetic μ of the slide comes from the slip start's sliding side, not through μs: just
 //! after the start m2·ü2 + m1·ü1 = −μ·(m1 + m2)·g·s, with ü1 continuous there and ü2 the
 //! table's acceleration plus the slip acceleration's sliding side at the start (the detector's
-//! line through its first sliding samples,
+//! parabola through its first sliding samples,
 //! [`PhaseDetector::slip_start_accel`](ssvr_core::detect::acceleration::PhaseDetector::slip_start_accel);
 //! it jumps by (μs − μ)·M·g), so
 //! [`StickSlipEstimator::slide_coefficient`](ssvr_core::stick_slip::StickSlipEstimator::slide_coefficient)
@@ -97,7 +97,8 @@ impl BaseTuning {
     #[inline(never)]
     pub fn slip_start(&mut self, at: &SlipStart) -> Option<f32> {
         let level = at.level;
-        let mu_k = at.mu_k.filter(|m| m.is_finite());
+        // (Beyond a factor 2 of the prior's μ, or not finite: not a slide's.)
+        let mu_k = at.mu_k.filter(|&m| self.plausible(f64::from(m)));
         if let Some(m) = mu_k {
             self.slides.push(m);
             // (Predict mode, μ known: the slide's coefficient from the model's ü1 against it

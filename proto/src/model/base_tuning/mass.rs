@@ -17,8 +17,9 @@
 //! ω and ζ held (f and ξ rescaled by √(M_old/M_new), m1 = (M − 1)·m2 with the prior's m2): a
 //! first step with the default scene's slope, ρ ≈ −[`FIRST_SLOPE`]·δM/M, then secant steps,
 //! each at most [`MAX_STEP`] of M, M within [`MAX_CHANGE`] of the prior's. A mean within 3σ,
-//! or within [`DEAD_BAND`], of 0 changes nothing. The slip starts of the first stuck phases
-//! after a change ([`SETTLE`]) ran partly on the old p and are not counted. The window's
+//! or within [`DEAD_BAND`], of 0 changes nothing. A step is taken at the next check; the slip
+//! starts until then and those of the first stuck phases after it ([`SETTLE`]) ran partly on the
+//! old p and are not counted. The window's
 //! mean leaves out the residual farthest from its median ([`trimmed`]). A residual that moved
 //! beyond its noise after a step, but the wrong way (a secant slope below a tenth of the
 //! first's, or of the wrong sign), is not p's error: M then goes back to where it was before
@@ -42,6 +43,9 @@ pub const FIRST_SLOPE: f64 = 1.27;
 pub const MAX_STEP: f64 = 0.05;
 /// Largest change of ln M from the prior's.
 pub const MAX_CHANGE: f64 = 0.2;
+/// The smallest ln M a step may reach (M = 1 + m1/m2 > 1).
+const MIN_LN_M: f64 = 1e-3;
+
 /// A mean residual within this of 0 changes nothing: the breakaway's own error, and what gain
 /// errors put in it (at 0.005, the scorecard's `gains_1%` rows moved M: El Centro 0.24 → 0.64 %
 /// RMS; Table 2 test 2's ξ × 0.5 0.10 → 0.21 %).
@@ -130,7 +134,8 @@ impl BaseTuning {
             return;
         }
         let fit = &mut self.mass;
-        if fit.stopped {
+        // (A step waits for the next check: the slip starts until then ran on the old M.)
+        if fit.stopped || fit.pending > 0.0 {
             return;
         }
         if fit.skip > 0 {
@@ -159,10 +164,11 @@ impl BaseTuning {
             f64::from(fit.prev.1),
             f64::from(fit.prev.2),
         );
-        // The secant's slope, when the residual moved beyond its noise since the last step
-        // (NaN before the first step: the first slope then).
+        // The secant's slope, when M was moved and the residual moved beyond its noise since
+        // (the first slope before the first step, NaN there).
         let secant = -(mean - r0) / (ln_m - l0);
-        let moved = libm::fabs(mean - r0) > 3.0 * libm::sqrt(sd * sd + s0 * s0);
+        let moved = libm::fabs(ln_m - l0) > 1e-6
+            && libm::fabs(mean - r0) > 3.0 * libm::sqrt(sd * sd + s0 * s0);
         if moved && secant <= 0.1 * FIRST_SLOPE {
             // The residual went the wrong way after the last step, or stayed: it is not p's
             // error. Back to the M before the step, and no more.
@@ -177,10 +183,14 @@ impl BaseTuning {
         };
         let step = (mean / slope).clamp(-MAX_STEP, MAX_STEP);
         let ln_prior = 2.0 * libm::log(f64::from(self.prior_root_m));
-        let ln_new = (ln_m + step).clamp(ln_prior - MAX_CHANGE, ln_prior + MAX_CHANGE);
+        // (M = 1 + m1/m2 stays above 1.)
+        let ln_new = (ln_m + step)
+            .clamp(ln_prior - MAX_CHANGE, ln_prior + MAX_CHANGE)
+            .max(MIN_LN_M);
         fit.prev = (ln_m as f32, mean as f32, sd as f32);
-        fit.pending = libm::exp(ln_new) as f32;
-        fit.skip = SETTLE as u8;
+        if libm::fabs(ln_new - ln_m) > 1e-6 {
+            fit.pending = libm::exp(ln_new) as f32;
+        }
     }
 
     /// The coefficients of a new M, if one is pending: ω = p·√M and ζ = ξ·√M held, m1 from
@@ -196,12 +206,18 @@ impl BaseTuning {
         params.natural_frequency_hz *= scale;
         params.damping_ratio *= scale;
         params.m1_kg = (m_new - 1.0) * params.m2_kg;
-        let c = Structure::new(params)
+        let Ok(c) = Structure::new(params)
             .and_then(|s| StickSlipCoefficients::<f32>::new(&s, self.adoption.rate()))
-            .ok()?;
+        else {
+            // Not taken: no secant across it.
+            self.mass.prev.0 = f32::NAN;
+            return None;
+        };
         self.adoption.set_params(params);
         self.root_m = libm::sqrt(m_new);
         self.r = (params.m2_kg / params.m1_kg) as f32;
+        // The next slip starts' stuck phases ran partly on the old p.
+        self.mass.skip = SETTLE as u8;
         Some(c)
     }
 
@@ -301,6 +317,32 @@ mod tests {
             slide(&mut b, 1, 0.1882, true);
         }
         assert!(b.take_mass().is_none());
+    }
+
+    /// A step waits for the next check: the slip starts until then are not counted, and the
+    /// SETTLE after it count from there; a step at the MAX_CHANGE bound is none.
+    #[test]
+    fn a_step_counts_from_when_it_is_taken() {
+        let mut b = tuning();
+        for _ in 0..SLIP_STARTS {
+            slide(&mut b, 1, 0.1882, false);
+        }
+        // No check yet: a whole window more, at the old M, is not counted.
+        for _ in 0..2 * SLIP_STARTS {
+            slide(&mut b, 1, 0.15, false);
+        }
+        assert_eq!(b.mass.n, 0);
+        let m_step = b.mass.pending;
+        assert!(b.check(u32::MAX).0.is_some());
+        assert_eq!(b.mass.skip, SETTLE as u8);
+        assert!((1.0 + b.m1_in_use() / 1.75 - f64::from(m_step)).abs() < 1e-3);
+        // At the bound: M stays, nothing pending.
+        let mut b = tuning();
+        for k in 0..40 * (SETTLE + SLIP_STARTS) {
+            slide(&mut b, 1, if k % 2 == 0 { 0.23 } else { 0.27 }, false);
+            b.check(u32::MAX);
+        }
+        assert_eq!(b.mass.pending, 0.0);
     }
 
     /// The trimmed mean of El Centro's first window (m1 told 5 % high): the +8.4 % left out.
