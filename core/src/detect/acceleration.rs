@@ -59,7 +59,7 @@ const STALL_VELOCITY: f32 = 8.0;
 /// declared stuck whatever its integrated velocity (the stick then back-dated to that limit).
 const STALL_FORCE: usize = 8;
 
-/// … plus this many times the magnitude of s̈'s last second difference.
+/// … plus this many times the magnitudes of s̈'s last second and third differences.
 const CURVATURES: f32 = 4.0;
 
 /// The first samples, during which the base is taken to be at rest (a table starts from rest):
@@ -402,10 +402,15 @@ impl<const N: usize> PhaseDetector<N> {
         let thr = self.cfg.threshold_m_s2;
         // While sliding s̈ is continuous; the friction force can only jump towards the sliding
         // direction (a stick or a reversal ends a deceleration).
-        // Judged against the signal's own curvature (its last second difference): coarse
-        // sampling of a fast s̈ misses its linear extrapolation by that much without any event.
-        let curv = libm::fabsf(b - (a2 - self.at(k - 3)));
-        let jump = d * (a - (a1 + b)) > JUMP_THRESHOLDS * thr + CURVATURES * curv;
+        // Judged against the signal's own curvature (its last second difference, and how fast
+        // that changes, its last third difference): coarse sampling of a fast s̈ misses its
+        // linear extrapolation by about their sum without any event. (Near a zero of the
+        // sliding oscillation's s̈ the second difference is small and the third is not: at
+        // 700 Hz, with the second alone, a deceleration's zero crossing read as a reversal.)
+        // (The curvature only when the miss exceeds the threshold's part: most samples.)
+        let miss = d * (a - (a1 + b));
+        let jump = miss > JUMP_THRESHOLDS * thr
+            && miss > JUMP_THRESHOLDS * thr + CURVATURES * self.curvature(k, b, a2);
         let v_end = self.v + a1 + 0.5 * b;
         let crossed = d * v_end <= 0.0;
         let stuck = libm::fabsf(a) < thr;
@@ -490,6 +495,16 @@ impl<const N: usize> PhaseDetector<N> {
         // A jump to acceleration in the sliding direction is not a friction change (noise).
         self.v += 0.5 * (a1 + a);
         None
+    }
+
+    /// |second difference| + |third difference| of s̈ at k − 1 (`b` = a(k−1) − a(k−2), `a2` =
+    /// a(k−2)).
+    #[inline]
+    fn curvature(&self, k: u64, b: f32, a2: f32) -> f32 {
+        let (a3, a4) = (self.at(k - 3), self.at(k.saturating_sub(4)));
+        let c1 = b - (a2 - a3);
+        let c2 = a2 - a3 - (a3 - a4);
+        libm::fabsf(c1) + libm::fabsf(c1 - c2)
     }
 
     /// The stall rule (|s̈| in the band for `m` ≥ `stall_samples` samples): the integrated
