@@ -320,6 +320,13 @@ impl Reference {
                         }
                     }
                     if let Some(t) = tuning.as_mut() {
+                        // (Fuse mode: M from the momentum balance, with the f and ξ in use.)
+                        if let Some(m1) = b.take_m1() {
+                            if t.with_m1(m1).is_some() {
+                                prior.m1_kg = m1;
+                                retune(est, prior, t.in_use(), rate)?;
+                            }
+                        }
                         let raw_base = channels[ssvr_proto::Channel::BaseAccel.index()];
                         t.push_run(&[top as f32], &[raw_base]);
                         if t.check(1).is_some() {

@@ -153,6 +153,11 @@ impl<G: GainRows<f32>> Tuning<G> {
     pub fn in_use(&self) -> (f64, f64, u32) {
         self.adoption.in_use()
     }
+
+    /// A new top mass with the f and ξ in use ([`Adoption::with_m1`]).
+    pub fn with_m1(&mut self, m1_kg: f64) -> Option<StickSlipCoefficients<f32>> {
+        self.adoption.with_m1(m1_kg)
+    }
 }
 
 impl Adoption {
@@ -206,6 +211,18 @@ impl Adoption {
     /// Replace the prior in use (a new m1 with f and ξ rescaled: the base tuning's M).
     pub fn set_params(&mut self, params: StructureParams) {
         self.params = params;
+    }
+
+    /// A new top mass `m1_kg` with the f and ξ in use (fuse mode's M from the momentum
+    /// balance): its coefficients, `None` (nothing changed) if the structure is rejected.
+    pub fn with_m1(&mut self, m1_kg: f64) -> Option<StickSlipCoefficients<f32>> {
+        let mut params = self.params;
+        params.m1_kg = m1_kg;
+        let c = Structure::new(params)
+            .and_then(|s| StickSlipCoefficients::<f32>::new(&s, self.rate))
+            .ok()?;
+        self.params = params;
+        Some(c)
     }
 
     /// The sample rate the coefficients are for (Hz).

@@ -43,6 +43,9 @@ pub const FIRST_SLOPE: f64 = 1.27;
 pub const MAX_STEP: f64 = 0.05;
 /// Largest change of ln M from the prior's.
 pub const MAX_CHANGE: f64 = 0.2;
+/// Fuse mode: a relative change of M smaller than this is not taken (0.5 %: p·√M 0.25 %).
+pub const MIN_REL_M: f64 = 5e-3;
+
 /// The smallest ln M a step may reach (M = 1 + m1/m2 > 1).
 const MIN_LN_M: f64 = 1e-3;
 
@@ -197,7 +200,7 @@ impl BaseTuning {
     /// M with the prior's m2; the momentum balance's r = m2/m1 and √M follow.
     pub(super) fn take_mass(&mut self) -> Option<StickSlipCoefficients<f32>> {
         let m_new = f64::from(self.mass.pending);
-        if m_new <= 0.0 {
+        if self.fuse || m_new <= 0.0 {
             return None;
         }
         self.mass.pending = 0.0;
@@ -219,6 +222,42 @@ impl BaseTuning {
         // The next slip starts' stuck phases ran partly on the old p.
         self.mass.skip = SETTLE as u8;
         Some(c)
+    }
+
+    /// Fuse mode: M = 1 + 1/r from the momentum balance's r = m2/m1 ± `sd`, taken (at the next
+    /// check, [`Self::take_m1`]) when it differs from the M in use by 3σ and [`MIN_REL_M`] of
+    /// it, within [`MAX_CHANGE`] of the prior's.
+    pub(super) fn fuse_mass(&mut self, r: f64, sd: f64) {
+        if !(self.fuse && r > 0.0 && sd.is_finite()) {
+            return;
+        }
+        let m = 1.0 + 1.0 / r;
+        let sd_m = sd / (r * r);
+        let m_use = self.root_m * self.root_m;
+        let ln_prior = 2.0 * libm::log(f64::from(self.prior_root_m));
+        let change = libm::fabs(m - m_use);
+        if change > 3.0 * sd_m
+            && change > MIN_REL_M * m_use
+            && libm::fabs(libm::log(m) - ln_prior) < MAX_CHANGE
+        {
+            self.mass.pending = m as f32;
+        }
+    }
+
+    /// Fuse mode: the top mass of a new M, if one is pending (the model retunes with it and the
+    /// f and ξ in use); the momentum balance's r and √M follow.
+    pub fn take_m1(&mut self) -> Option<f64> {
+        let m_new = f64::from(self.mass.pending);
+        if !self.fuse || m_new <= 1.0 {
+            return None;
+        }
+        self.mass.pending = 0.0;
+        let mut params = self.adoption.params();
+        params.m1_kg = (m_new - 1.0) * params.m2_kg;
+        self.adoption.set_params(params);
+        self.root_m = libm::sqrt(m_new);
+        self.r = (params.m2_kg / params.m1_kg) as f32;
+        Some(params.m1_kg)
     }
 
     /// The top mass in use (kg): the prior's until the slip starts move M.
@@ -343,6 +382,33 @@ mod tests {
             b.check(u32::MAX);
         }
         assert_eq!(b.mass.pending, 0.0);
+    }
+
+    /// Fuse mode: M from the momentum balance's r when 3σ and 0.5 % from the M in use and
+    /// within MAX_CHANGE of the prior's, taken at `take_m1` (m1 = (M − 1)·m2, r and √M follow);
+    /// none in predict mode or for a non-positive r.
+    #[test]
+    fn fuse_takes_m_from_r() {
+        let fuse = || BaseTuning::new(params(), 10_000.0, false, true, 37).unwrap();
+        let mut b = fuse();
+        let r_true = 1.75 / 29.5;
+        // The prior's M within 0.5 %, or the change within 3σ: nothing.
+        b.fuse_mass(r_true * 1.004, 1e-5);
+        b.fuse_mass(r_true * 1.05, 2e-3);
+        b.fuse_mass(-0.1, 1e-5);
+        b.fuse_mass(r_true * 2.0, 1e-5);
+        assert_eq!(b.take_m1(), None);
+        // 5 % off, known to 1e-5: taken.
+        b.fuse_mass(r_true / 1.05, 1e-5);
+        let m1 = b.take_m1().unwrap();
+        assert!((m1 / (29.5 * 1.05) - 1.0).abs() < 1e-6, "{m1}");
+        assert!((f64::from(b.r) - r_true / 1.05).abs() < 1e-6);
+        assert!((b.root_m * b.root_m - (1.0 + 1.05 * 29.5 / 1.75)).abs() < 1e-4);
+        assert_eq!(b.take_m1(), None, "taken once");
+        let mut b = BaseTuning::new(params(), 10_000.0, false, false, 37).unwrap();
+        b.fuse_mass(r_true / 1.05, 1e-5);
+        assert_eq!(b.mass.pending, 0.0, "predict mode");
+        assert_eq!(b.take_m1(), None, "predict mode");
     }
 
     /// The trimmed mean of El Centro's first window (m1 told 5 % high): the +8.4 % left out.

@@ -204,6 +204,10 @@ impl BaseTuning {
         let sd = libm::sqrt(libm::fmax(var, 0.0));
         let differs = self.gain_differs(gain, 3.0 * sd);
         self.take_top_gain(gain, sd, differs);
+        // M from r = −θ0/G (G this fit's: a gain in use not yet right would be r's error).
+        let r = -f.theta[0] / gain;
+        let var_r = f.cov[0][0] / (gain * gain) + (r / gain) * (r / gain) * var;
+        self.fuse_mass(r, libm::sqrt(libm::fmax(var_r, 0.0)));
     }
 
     /// Fuse mode: the top accelerometer's gain relative to the base's from the stuck and sliding
