@@ -154,7 +154,8 @@ impl<G: GainRows<f32>> Tuning<G> {
         self.adoption.in_use()
     }
 
-    /// A new top mass with the f and ξ in use ([`Adoption::with_m1`]).
+    /// A new top mass with the f and ξ in use: its coefficients (`None`: rejected, nothing
+    /// changed).
     pub fn with_m1(&mut self, m1_kg: f64) -> Option<StickSlipCoefficients<f32>> {
         self.adoption.with_m1(m1_kg)
     }
