@@ -323,6 +323,7 @@ impl Reference {
                         // (Fuse mode: M from the momentum balance, with the f and ξ in use.)
                         if let Some(m1) = b.take_m1() {
                             if t.with_m1(m1).is_some() {
+                                b.set_m1(m1);
                                 prior.m1_kg = m1;
                                 retune(est, prior, t.in_use(), rate)?;
                             }

@@ -456,9 +456,14 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
         // (The identification reads the measured top as it is: its offsets filtered out, its
         // gain the one to find; f and ξ are fitted on it scaled by the gain correction in use.)
         if let Some(t) = &mut self.tuning {
-            // (Fuse mode: M from the momentum balance, with the f and ξ in use.)
-            if let Some(c) = bt.take_m1().and_then(|m1| t.with_m1(m1)) {
-                self.est.retune(c);
+            // (Fuse mode: M from the momentum balance, with the f and ξ in use; at the check
+            // that found it, in batches as one sample at a time. Deferring it to a run that
+            // starts stuck made the batches' runs decide, and the firmware left the host.)
+            if let Some(m1) = bt.take_m1() {
+                if let Some(c) = t.with_m1(m1) {
+                    bt.set_m1(m1);
+                    self.est.retune(c);
+                }
             }
             t.push_run(measured, base);
             if let Some(c) = t.check(n as u32) {

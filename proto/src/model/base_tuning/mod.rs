@@ -128,7 +128,7 @@ pub struct BaseTuning {
     /// deviation.
     top_scale: f32,
     countdown: u32,
-    /// Fuse mode: only the offsets (the top accelerometer's from `top_fit`).
+    /// Fuse mode: only the offsets (the top accelerometer's from `top_fit`) and M.
     fuse: bool,
     zeroed: bool,
     /// μ is known from both directions (adopted, or the one in use confirmed).
@@ -162,7 +162,8 @@ pub struct BaseTuning {
     top_fit: PagedNormal<f32, 3, 10>,
     top_offset_std_use: f64,
     top_gain_std_use: f64,
-    /// Predict mode: M from the slip starts' residuals ([`Self::m1_in_use`]), and the prior's M.
+    /// M from the slip starts' residuals (predict mode) or the momentum balance (fuse mode;
+    /// [`Self::m1_in_use`]), and the prior's √M.
     mass: MassFit,
     prior_root_m: f32,
     /// The prior's μ/μs: a slip start's breakaway coefficient times it is the slide's μ

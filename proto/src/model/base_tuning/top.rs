@@ -204,10 +204,13 @@ impl BaseTuning {
         let sd = libm::sqrt(libm::fmax(var, 0.0));
         let differs = self.gain_differs(gain, 3.0 * sd);
         self.take_top_gain(gain, sd, differs);
-        // M from r = −θ0/G (G this fit's: a gain in use not yet right would be r's error).
-        let r = -f.theta[0] / gain;
-        let var_r = f.cov[0][0] / (gain * gain) + (r / gain) * (r / gain) * var;
-        self.fuse_mass(r, libm::sqrt(libm::fmax(var_r, 0.0)));
+        // M from r = −θ0/G (G this fit's: a gain in use not yet right would be r's error; θ0's
+        // covariance with G left out: it moved σ_r by under 0.5 %, σ_r being μ·g's).
+        if libm::fabs(gain - 1.0) < MAX_GAIN_ERROR {
+            let r = -f.theta[0] / gain;
+            let var_r = f.cov[0][0] / (gain * gain) + (r / gain) * (r / gain) * var;
+            self.fuse_mass(r, libm::sqrt(libm::fmax(var_r, 0.0)));
+        }
     }
 
     /// Fuse mode: the top accelerometer's gain relative to the base's from the stuck and sliding
