@@ -239,21 +239,13 @@ impl Reference {
                         // The first slides' friction from the breakaway (the firmware's code).
                         let age = e.age_samples;
                         if e.kind == EventKind::SlipStart && age <= *max_age {
-                            let fuse = !*predict;
-                            let mu_s = est.breakaway_coefficient(f64::from(age), fuse);
-                            let mu_s = mu_s.map(|m| m as f32);
-                            if let Some(mu) = mu_s {
-                                breakaways.push(mu);
-                            }
-                            let slip = f64::from(*start_accel);
-                            let mu_k = est.slide_coefficient(f64::from(age), fuse, slip);
-                            let at = SlipStart {
-                                level: phase,
-                                mu_s,
-                                mu_s_mean: breakaways.mean(),
-                                mu_k: mu_k.map(|m| m as f32),
-                                adopted: est.mu_adopted(),
-                            };
+                            let at = SlipStart::of(
+                                est.as_ref(),
+                                (phase, age),
+                                !*predict,
+                                *start_accel,
+                                breakaways,
+                            );
                             if let Some(m) = b.slip_start(&at) {
                                 est.set_friction(f64::from(m));
                             }

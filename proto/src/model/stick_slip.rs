@@ -187,22 +187,16 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot> Model
             }
         }
         if e.kind == EventKind::SlipStart && e.age_samples <= self.max_age {
-            let mu_s = self.est.breakaway_coefficient(e.age_samples, self.fuse);
-            if let Some(mu) = mu_s {
-                self.breakaways.push(mu);
-            }
+            let at = SlipStart::of(
+                &self.est,
+                (phase, e.age_samples),
+                self.fuse,
+                self.start_accel,
+                &mut self.breakaways,
+            );
             // The first slides' friction from the slip start, before any estimate: the
             // momentum balance on its sliding side (else the breakaway's).
-            let age = e.age_samples;
             if let Some(b) = self.base_tuning.get_mut() {
-                let mu_k = self.est.slide_coefficient(age, self.fuse, self.start_accel);
-                let at = SlipStart {
-                    level: phase,
-                    mu_s,
-                    mu_s_mean: self.breakaways.mean(),
-                    mu_k,
-                    adopted: self.est.mu_adopted(),
-                };
                 if let Some(m) = b.slip_start(&at) {
                     self.est.set_friction(m);
                 }

@@ -34,6 +34,9 @@
 //! error in the first slides (El Centro told μs = μ: predict mode 0.066 → 0.54 % RMS).
 
 use super::BaseTuning;
+use crate::model::Breakaways;
+use ssvr_core::math::{Real, Transcendentals};
+use ssvr_core::stick_slip::StickSlipEstimator;
 
 /// Predict mode: the weight of a slip start's coefficient against the prior's μ, μ = μ_prior +
 /// w·(μ_b − μ_prior). Before the first slide the model's ü1 comes from the prior's f and ξ: a
@@ -76,6 +79,39 @@ pub struct SlipStart {
     pub mu_k: Option<f32>,
     /// The estimator has adopted its own μ̂ (fuse mode).
     pub adopted: bool,
+}
+
+impl SlipStart {
+    /// The slip start into phase `level`, `age` samples before the estimator's next sample: its
+    /// breakaway coefficient (pushed to the slip starts' `breakaways`) and its slide's from
+    /// `slip_accel`, the sliding side ([`StickSlipEstimator::slide_coefficient`]), both from the
+    /// measured top (`fuse`) or the model's. The firmware's model (f32) and the host's f64
+    /// reference make it alike.
+    pub fn of<T: Real, M: Transcendentals<T>, const H: usize>(
+        est: &StickSlipEstimator<T, M, H>,
+        (level, age): (i8, f32),
+        fuse: bool,
+        slip_accel: f32,
+        breakaways: &mut Breakaways,
+    ) -> Self {
+        let age = T::from_f64(f64::from(age));
+        let mu_s = est
+            .breakaway_coefficient(age, fuse)
+            .map(|m| m.to_f64() as f32);
+        if let Some(mu) = mu_s {
+            breakaways.push(mu);
+        }
+        let mu_k = est
+            .slide_coefficient(age, fuse, T::from_f64(f64::from(slip_accel)))
+            .map(|m| m.to_f64() as f32);
+        Self {
+            level,
+            mu_s,
+            mu_s_mean: breakaways.mean(),
+            mu_k,
+            adopted: est.mu_adopted(),
+        }
+    }
 }
 
 impl BaseTuning {
