@@ -238,7 +238,8 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
 
     /// The model adopts μ̂ if so set, there are `min_blocks` blocks, and μ̂ is plausible: within
     /// a factor of 2 of the structure's μ (a μ̂ outside that range means a wrong structure or
-    /// bad measurements, not a friction estimate); the sliding observer then narrows.
+    /// bad measurements, not a friction estimate); the sliding observer then narrows (unless
+    /// held wide: [`Self::hold_wide`]).
     #[inline(always)]
     fn adopt_mu(&mut self) {
         let mu_hat = self.id.rls.mu;
@@ -248,7 +249,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
             self.mu_use = mu_hat;
             self.gmu = self.c.g * self.mu_use;
             self.mu_adopted = true;
-            if !self.slide_narrow {
+            if !self.slide_narrow && !self.hold_wide {
                 self.slide_narrow = true;
                 (self.slide_gain, self.slide) = self.slides[1];
             }

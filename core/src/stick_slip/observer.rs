@@ -28,7 +28,8 @@ pub(super) fn observer_gain<T: Real, M: Transcendentals<T>>(
 /// observer.
 const SLIDE_BANDWIDTH_MAX_PER_SAMPLE: f64 = 0.1;
 
-/// The sliding observer's bandwidth in units of p·√M before μ̂ is adopted: the error of a
+/// The sliding observer's bandwidth in units of p·√M before μ̂ is adopted (and, when held,
+/// f and ξ known: [`StickSlipEstimator::hold_wide`](super::StickSlipEstimator::hold_wide)): the error of a
 /// wrong prior's μ grows fast while sliding (measured on the robustness scorecard: μ told 25 %
 /// off, 1.3 % max error of the peak with it, 4.7 % with [`SLIDE_NARROW`]).
 pub(super) const SLIDE_WIDE: f64 = 4.0;

@@ -67,7 +67,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
             (r.a, r.b, r.n) = (T::ONE, r.mu, 0);
         }
         // The wide sliding observer until μ̂ is adopted again after a large change.
-        self.slide_narrow &= !large;
+        self.slide_narrow &= !large && !self.hold_wide;
         (self.slide_gain, self.slide) = self.slides[usize::from(self.slide_narrow)];
     }
 }

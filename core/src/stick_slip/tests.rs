@@ -863,3 +863,63 @@ fn a_retune_mid_slide_keeps_the_friction_episode() {
     assert!((m.mu - 0.2).abs() < 1e-5, "{m:?}");
     assert!(est.mu_adopted());
 }
+
+/// `hold_wide`: μ̂ adopted, the held estimator keeps the wide sliding observer while the other
+/// narrows at the adoption; released, it narrows at the next adoption of μ̂ (the next slide's
+/// start), and both then run the same sliding map. The measured top is the truth model's
+/// (μ = 0.2), sliding back and forth; both estimators start from μ = 0.25.
+#[test]
+fn a_held_sliding_observer_stays_wide_until_released() {
+    let cfg = StickSlipConfig {
+        use_identified_mu: true,
+        ..StickSlipConfig::DEFAULT
+    }
+    .for_rate(1e4);
+    let mut truth = StickSlipEstimator::<f64, Libm, 64>::new(
+        &structure(0.2, 0.05),
+        1e4,
+        StickSlipConfig {
+            identify_mu: false,
+            ..StickSlipConfig::DEFAULT
+        },
+    )
+    .unwrap();
+    let mut free =
+        StickSlipEstimator::<f64, Libm, 64>::new(&structure(0.25, 0.05), 1e4, cfg).unwrap();
+    let mut held = free.clone();
+    held.hold_wide(true);
+    let wide = free.slides[0].0;
+    assert_ne!(wide, free.slides[1].0, "the two observers differ");
+    let mut released_at = None;
+    for k in 0..12_000u64 {
+        if k % 700 == 0 {
+            let s = if (k / 700) % 2 == 0 { 1 } else { -1 };
+            for e in [&mut truth, &mut free, &mut held] {
+                e.push_event(s, 0.0).unwrap();
+            }
+        }
+        let u = 2.0 * (43.9 * k as f64 * 1e-4).sin();
+        let y = truth.update(u, f64::NAN);
+        free.update(u, y);
+        held.update(u, y);
+        assert_eq!(held.mu_adopted(), free.mu_adopted(), "k {k}");
+        // Narrow once μ̂ is adopted; the held one wide until released.
+        let narrow = free.slides[1].0;
+        assert_eq!(
+            free.slide_gain,
+            if free.mu_adopted() { narrow } else { wide }
+        );
+        if released_at.is_none() {
+            assert_eq!(held.slide_gain, wide, "k {k}");
+            if free.mu_adopted() && k >= 5_000 {
+                held.hold_wide(false);
+                released_at = Some(k);
+            }
+        } else if k >= 5_600 {
+            // (The slide started at 5 600 adopts μ̂ again: narrow from there.)
+            assert_eq!(held.slide_gain, narrow, "k {k}");
+        }
+    }
+    assert!(free.mu_adopted());
+    assert_eq!(released_at, Some(5_000));
+}

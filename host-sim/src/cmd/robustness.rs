@@ -2,7 +2,9 @@
 //! [`crate::report::robustness`]).
 
 use crate::plot::robustness::figure;
-use crate::report::robustness::{markdown, perturbations, quick_perturbations, scenes, scorecard};
+use crate::report::robustness::{
+    markdown, perturbations, quick_perturbations, scenes, scorecard, tally,
+};
 use anyhow::{Context, Result};
 use ssvr_proto::Mode;
 use std::io::IsTerminal;
@@ -58,8 +60,11 @@ pub fn command(args: RobustnessArgs) -> Result<()> {
     figure(&rows, &dir.join("robustness.png"))?;
     if args.json {
         println!("{json}");
-        let met = rows.iter().filter(|r| r.goal_met).count();
-        eprintln!("{met} of {} rows meet their goal", rows.len());
+        let (met, counted) = tally(&rows);
+        eprintln!(
+            "{met} of {counted} rows meet their goal ({} beyond the goals' range not counted)",
+            rows.len() - counted
+        );
     } else {
         print!("{md}");
     }

@@ -136,7 +136,7 @@ impl Reference {
     pub fn new(scene: &Scene, plan: &Plan) -> Result<Self> {
         let prior = Structure::new(plan.specimen.structure)
             .map_err(|e| anyhow!("the prior specimen is invalid: {e}"))?;
-        Ok(match plan.model {
+        let mut r = match plan.model {
             Model::Rectangular => Reference::ClosedForm {
                 cf: DuhamelClosedForm::new(&prior),
                 train: Box::default(),
@@ -184,7 +184,17 @@ impl Reference {
                 breakaways: Breakaways::default(),
                 start_accel: f32::NAN,
             },
-        })
+        };
+        // (The firmware's fuse mode: the wide sliding observer until f and ξ are known.)
+        if let Reference::StickSlip {
+            est,
+            tuning: Some(_),
+            ..
+        } = &mut r
+        {
+            est.hold_wide(true);
+        }
+        Ok(r)
     }
 
     /// What it is, in words (the report's `reference`).
@@ -325,6 +335,7 @@ impl Reference {
                         if t.check(1).is_some() {
                             retune(est, prior, t.in_use(), rate)?;
                         }
+                        est.hold_wide(!t.known());
                         if let Some(g) = t.take_gain() {
                             b.adopt_stuck_gain(g);
                         }

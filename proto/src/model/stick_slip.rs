@@ -153,6 +153,9 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot> FromPlan
                 .map(|t| t.after_rest(plan.rest_samples)),
             Mode::Predict => None,
         };
+        let mut est = est;
+        // (Fuse mode, Coulomb friction: the wide sliding observer until f and ξ are known.)
+        est.hold_wide(tuning.is_some() && !law);
         let mut m = Self::new(est, plan.max_age as f32).with_tuning(tuning);
         m.fuse = plan.mode == Mode::Fuse;
         m.friction = F::of_plan(plan);
@@ -463,6 +466,7 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
             if let Some(c) = t.check(n as u32) {
                 self.est.retune(c);
             }
+            self.est.hold_wide(!t.known());
             if let Some(g) = t.take_gain() {
                 bt.adopt_stuck_gain(g);
             }

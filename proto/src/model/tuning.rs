@@ -61,6 +61,9 @@ pub struct Adoption {
     prior_f: f64,
     rate: f64,
     adoptions: u32,
+    /// f and ξ in use confirmed or adopted from an estimate known well enough for both
+    /// ([`Self::known`]).
+    known: bool,
 }
 
 impl<G: GainRows<f32>> Tuning<G> {
@@ -144,6 +147,13 @@ impl<G: GainRows<f32>> Tuning<G> {
         self.adoption.adopt(&e)
     }
 
+    /// Whether the f and ξ in use are known: an estimate with both known well enough adopted or
+    /// confirmed them (the adoption policy's `known`).
+    #[inline(always)]
+    pub fn known(&self) -> bool {
+        self.adoption.known()
+    }
+
     /// The identifier's estimate.
     pub fn estimate(&self) -> Option<OscillatorEstimate> {
         self.id.estimate()
@@ -169,6 +179,7 @@ impl Adoption {
             prior_f: params.natural_frequency_hz,
             rate,
             adoptions: 0,
+            known: false,
         }
     }
 
@@ -189,6 +200,7 @@ impl Adoption {
         let new_xi =
             known_xi && dxi > MIN_REL_CHANGE_XI * xi_use && dxi > 3.0 * e.damping_ratio_std;
         if !(new_f || new_xi) {
+            self.known |= known_xi;
             return None;
         }
         let mut params = self.params;
@@ -201,7 +213,15 @@ impl Adoption {
             .ok()?;
         self.params = params;
         self.adoptions = self.adoptions.saturating_add(1);
+        self.known |= known_xi;
         Some(c)
+    }
+
+    /// Whether the f and ξ in use are known: an estimate with both known well enough (f to
+    /// [`MAX_REL_STD_F`], ξ to [`MAX_REL_STD_XI`]) was adopted or confirmed them; until then
+    /// they are the prior's (or f alone is known).
+    pub fn known(&self) -> bool {
+        self.known
     }
 
     /// The prior with the f, ξ (and m1) in use.
@@ -326,5 +346,34 @@ mod tests {
         assert!(e.is_some());
         assert_eq!(a.estimate(), e);
         assert_eq!(c.estimate(), e);
+    }
+
+    /// `known`: not from a prior alone, nor from an estimate with f known and ξ not; from one
+    /// that confirms the f and ξ in use (nothing adopted), or that is adopted with both known.
+    #[test]
+    fn known_once_both_are_confirmed_or_adopted() {
+        let e = |f: f64, f_std: f64, xi: f64, xi_std: f64| OscillatorEstimate {
+            natural_frequency_hz: f,
+            natural_frequency_std_hz: f_std,
+            damping_ratio: xi,
+            damping_ratio_std: xi_std,
+            blocks: 100,
+        };
+        let (f, xi) = (params().natural_frequency_hz, params().damping_ratio);
+        let mut a = Adoption::new(params(), 10_000.0);
+        assert!(!a.known());
+        // f known and confirmed, ξ not known (σ 20 %): not known.
+        assert!(a.adopt(&e(f, 1e-4 * f, xi, 0.2 * xi)).is_none());
+        assert!(!a.known());
+        // Both known, both confirmed: known, nothing adopted.
+        assert!(a.adopt(&e(f, 1e-4 * f, xi, 1e-3 * xi)).is_none());
+        assert!(a.known());
+        assert_eq!(a.in_use().2, 0);
+        // A prior 8 % off: adopted with ξ known.
+        let mut b = Adoption::new(params(), 10_000.0);
+        assert!(b.adopt(&e(1.08 * f, 1e-4 * f, xi, 0.2 * xi)).is_some());
+        assert!(!b.known(), "f adopted, ξ not known");
+        assert!(b.adopt(&e(f, 1e-4 * f, 2.0 * xi, 1e-3 * xi)).is_some());
+        assert!(b.known());
     }
 }
