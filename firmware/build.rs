@@ -10,17 +10,19 @@
 //!   the same message) and makes the plan of its specimen and the model `SSVR_MODEL` =
 //!   `fixed-base` | `rectangular` (default) | `stick-slip`, in the mode `SSVR_MODE` = `fuse`
 //!   (default) | `predict`, with the host's own code
-//!   (`ssvr_proto::Plan::new`). Writes `OUT_DIR/plan.rs`: the plan's words and digest, the
+//!   (`ssvr_proto::Plan::new`), and the planned input's start `SSVR_PLANNED_START` (the f32's
+//!   bits in hex or `none`, as `host-sim qemu` passes it; unset: the scene file's own input, if
+//!   it is a whole scene). Writes `OUT_DIR/plan.rs`: the plan's words and digest, the
 //!   detector's ring, the stick-slip storage, and the model's and detector's types (only that
 //!   model's code is compiled in).
 //! * Board image: also `OUT_DIR/scene_board.rs`: the integer TIM2 rate, the ADC configuration and
 //!   the sensor scaling of the scene's board settings.
 //!
-//! Rebuilds track the scene and the model: `rerun-if-env-changed=SSVR_SCENE`, `SSVR_MODEL` and
-//! `rerun-if-changed=<scene>`.
+//! Rebuilds track the scene and the model: `rerun-if-env-changed=SSVR_SCENE`, `SSVR_MODEL`,
+//! `SSVR_MODE`, `SSVR_PLANNED_START` and `rerun-if-changed=<scene>`.
 
 use ssvr_proto::{DetectorPlan, Mode, ModelKind, Plan};
-use ssvr_scene::Specimen;
+use ssvr_scene::{Scene, Specimen};
 use std::env;
 use std::fmt::Write as _;
 use std::fs;
@@ -96,10 +98,28 @@ fn main() {
     println!("cargo:rerun-if-changed={}", path.display());
     // The host's parser: the same checks and the same messages (file, line, key).
     let specimen = Specimen::load(&path).unwrap_or_else(|e| panic!("SSVR_SCENE: {e}"));
-    let plan = Plan::new(specimen.prior(), model)
+    let mut plan = Plan::new(specimen.prior(), model)
         .unwrap_or_else(|e| panic!("scene {}: {e} (model {})", path.display(), model.name()))
         .with_mode(mode)
         .with_rest(specimen.start_s);
+    // The planned input's start, as the host plans it (`host_sim::pipeline::plan_for_mode`):
+    // `SSVR_PLANNED_START` (host-sim's builds: the f32's bits in hex, or `none`), else the
+    // scene file's own input (a whole scene: the default table1.toml), else none.
+    println!("cargo:rerun-if-env-changed=SSVR_PLANNED_START");
+    plan.planned_start_m_s2 = match env::var("SSVR_PLANNED_START") {
+        Ok(v) if v == "none" => None,
+        Ok(v) => Some(f32::from_bits(u32::from_str_radix(&v, 16).unwrap_or_else(
+            |e| panic!("SSVR_PLANNED_START: {v:?} is not an f32's bits in hex ({e})"),
+        ))),
+        Err(_) => Scene::load(&path).ok().and_then(|s| {
+            let input = s.input_motion();
+            ssvr_proto::plan::planned_start(
+                &plan.specimen.structure,
+                plan.specimen.sample_rate_hz,
+                |t| input.accel(t),
+            )
+        }),
+    };
     fs::write(out.join("plan.rs"), plan_consts(&path, &plan)).expect("write OUT_DIR/plan.rs");
     if board {
         fs::write(out.join("scene_board.rs"), board_consts(&path, &specimen))

@@ -28,9 +28,13 @@ pub fn plan_for(scene: &Scene, model: ModelKind) -> Result<Plan> {
 }
 
 /// The plan of a scene, a model and a mode (with the scene's rest before the input, whose
-/// accelerometer readings the pipeline zeroes).
+/// accelerometer readings the pipeline zeroes, and its planned input's start).
 pub fn plan_for_mode(scene: &Scene, model: ModelKind, mode: Mode) -> Result<Plan> {
-    plan_for_specimen(&crate::scene::Specimen::from(scene), model, mode)
+    let input = scene.input_motion();
+    Ok(
+        plan_for_specimen(&crate::scene::Specimen::from(scene), model, mode)?
+            .with_planned_input(|t| input.accel(t)),
+    )
 }
 
 /// The plan of a specimen (its prior, rate and rest before the input), a model and a mode:

@@ -6,7 +6,7 @@
 //! by a digest ([`Plan::digest`]) the firmware reports so the host can check the image runs
 //! the plan it expects.
 
-use crate::model::{Mode, ModelKind};
+use crate::model::{open_start_samples, Mode, ModelKind};
 use ssvr_core::detect::acceleration::PhaseDetectorConfig;
 use ssvr_core::detect::displacement::DetectorConfig;
 use ssvr_core::recursion::Estimator32;
@@ -114,12 +114,37 @@ pub struct Plan {
     /// Samples of rest before the input (the planned input's start): the accelerometers are
     /// zeroed on them ([`crate::zeroing`]).
     pub rest_samples: u32,
+    /// The planned table acceleration at the input's start (m/s²): the intercept of the
+    /// least-squares line through the planned input over the open-loop start's samples
+    /// ([`open_start_samples`]); predict mode without a rest takes the table accelerometer's
+    /// offset as the measured line's intercept less it. `None`: not planned (a replay).
+    pub planned_start_m_s2: Option<f32>,
+}
+
+/// The planned table acceleration at the input's start for the prior `params` at `rate`
+/// ([`Plan::planned_start_m_s2`]): the intercept of the least-squares line through
+/// `accel(k/rate)` over the first [`open_start_samples`] samples (`None` if there are none or
+/// it is not finite).
+pub fn planned_start(
+    params: &StructureParams,
+    rate: f64,
+    accel: impl Fn(f64) -> f64,
+) -> Option<f32> {
+    let n = open_start_samples(params, rate);
+    let (mut s, mut sk, mut skk, mut sy, mut sky) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for k in 0..n {
+        let (k, y) = (k as f64, accel(k as f64 / rate));
+        (s, sk, skk, sy, sky) = (s + 1.0, sk + k, skk + k * k, sy + y, sky + k * y);
+    }
+    let det = s * skk - sk * sk;
+    let b = (skk * sy - sk * sky) / det;
+    (det > 0.0 && b.is_finite()).then_some(b as f32)
 }
 
 /// Version of the word layout ([`Plan::to_words`]).
-pub const WORDS_VERSION: u32 = 4;
+pub const WORDS_VERSION: u32 = 5;
 /// Length of a plan's words.
-pub const WORDS: usize = 50 + COEFFICIENT_WORDS;
+pub const WORDS: usize = 51 + COEFFICIENT_WORDS;
 
 impl Plan {
     /// The plan of `specimen` and `model`: every setting validated by the library.
@@ -173,6 +198,7 @@ impl Plan {
             coefficients: coefficients.to_bits(),
             mode: Mode::Fuse,
             rest_samples: 0,
+            planned_start_m_s2: None,
         })
     }
 
@@ -203,6 +229,15 @@ impl Plan {
         } else {
             0
         };
+        self
+    }
+
+    /// This plan with its planned table acceleration `accel(t)` (m/s², t in s from the input's
+    /// start): [`Self::planned_start_m_s2`], the intercept of the least-squares line through
+    /// its first [`open_start_samples`] samples (`None` if there are none or it is not finite).
+    pub fn with_planned_input(mut self, accel: impl Fn(f64) -> f64) -> Self {
+        let rate = self.specimen.sample_rate_hz;
+        self.planned_start_m_s2 = planned_start(&self.specimen.structure, rate, accel);
         self
     }
 
@@ -298,6 +333,11 @@ impl Plan {
         }
         w.u32(self.mode as u32);
         w.u32(self.rest_samples);
+        // (Not planned: a NaN.)
+        w.u32(match self.planned_start_m_s2 {
+            Some(a) => a.to_bits(),
+            None => f32::NAN.to_bits(),
+        });
         w.0
     }
 
@@ -383,6 +423,10 @@ impl Plan {
             return Err(PlanError::Words);
         };
         let rest_samples = r.u32();
+        let planned_start_m_s2 = match f32::from_bits(r.u32()) {
+            a if a.is_finite() => Some(a),
+            _ => None,
+        };
         if r.i != WORDS {
             return Err(PlanError::Words);
         }
@@ -398,6 +442,7 @@ impl Plan {
             coefficients,
             mode,
             rest_samples,
+            planned_start_m_s2,
         })
     }
 
@@ -489,6 +534,36 @@ mod tests {
             disp_range_m: 0.05,
             friction: FrictionLaw::Coulomb,
         }
+    }
+
+    /// The planned start: the intercept of the least-squares line through the planned input's
+    /// first `open_start_samples` samples; exact for a line, within A·(ω·T)³/30 of 0 for a sine
+    /// from rest (T the start's length), carried by the words; `None` without a plan.
+    #[test]
+    fn the_plan_carries_the_planned_start() {
+        let plan = Plan::new(specimen(10_000.0), ModelKind::StickSlip).unwrap();
+        assert_eq!(plan.planned_start_m_s2, None);
+        assert_eq!(Plan::from_words(&plan.to_words()), Ok(plan));
+        let line = plan.with_planned_input(|t| 0.06 + 3.0 * t);
+        let a = line.planned_start_m_s2.unwrap();
+        assert!((a - 0.06).abs() < 1e-6, "{a}");
+        assert_eq!(Plan::from_words(&line.to_words()), Ok(line));
+        assert_ne!(line.digest(), plan.digest());
+        // 2 m/s² at 7 Hz from rest: the start is 22 samples (0.1 rad of p), ω·T = 0.0154.
+        let w = 2.0 * core::f64::consts::PI * 7.0;
+        let sine = plan.with_planned_input(|t| 2.0 * libm::sin(w * t));
+        let a = sine.planned_start_m_s2.unwrap();
+        let n = open_start_samples(&plan.specimen.structure, 10_000.0);
+        assert_eq!(n, 22);
+        let bound = 2.0 * libm::pow(w * n as f64 / 10_000.0, 3.0) / 30.0;
+        assert!((a as f64).abs() < 1.5 * bound, "{a} against {bound}");
+        // No start at 2 kHz (fewer than 10 samples), or a planned input that is not finite.
+        let coarse = Plan::new(specimen(2_000.0), ModelKind::StickSlip).unwrap();
+        assert_eq!(coarse.with_planned_input(|_| 1.0).planned_start_m_s2, None);
+        assert_eq!(
+            plan.with_planned_input(|_| f64::NAN).planned_start_m_s2,
+            None
+        );
     }
 
     #[test]

@@ -137,8 +137,9 @@ impl Scene {
         }
     }
 
-    /// The input's own table motion, from its t = 0 (without the rest before `start_s`).
-    fn input_motion(&self) -> TableMotion {
+    /// The input's own table motion, from its t = 0 (without the rest before `start_s`): the
+    /// planned input a controller is told.
+    pub fn input_motion(&self) -> TableMotion {
         match &self.input {
             Input::Harmonic {
                 amplitude_m_s2,

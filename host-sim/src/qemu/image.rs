@@ -71,15 +71,18 @@ fn leaks_into_nested_cargo(key: &str) -> bool {
 /// `firmware_dir` (see [`cargo_build`]). Returns the ELF (in `firmware/target`: a later build
 /// for another scene overwrites it; [`build_for_scene`] copies it out).
 pub fn build_qemu_image(firmware_dir: &Path) -> Result<PathBuf> {
-    cargo_build(firmware_dir, QEMU_BIN, None, None, None, None)
+    cargo_build(firmware_dir, QEMU_BIN, None, None, None, None, None)
 }
 
 /// `cargo build --release --bin <bin> [--no-default-features --features <features>]` in
 /// `firmware_dir` (which has its own `.cargo/config.toml` selecting `thumbv7em-none-eabihf`),
 /// with a clean environment (no inherited `CARGO_TARGET_DIR`, `RUSTFLAGS`, ... from a parent
 /// cargo), `SSVR_SCENE` set to `scene` (absolute) or removed, `SSVR_MODEL` set to `model`
-/// or removed (the firmware's default, rectangular) and `SSVR_MODE` set to `mode` or removed
-/// (fuse). Returns the ELF.
+/// or removed (the firmware's default, rectangular), `SSVR_MODE` set to `mode` or removed
+/// (fuse), and `SSVR_PLANNED_START` set to `planned` (the plan's
+/// [`planned_start_m_s2`](ssvr_proto::Plan::planned_start_m_s2): its f32 bits in hex, or `none`)
+/// or removed (the firmware then plans the scene file's own input, if it has one). Returns the
+/// ELF.
 pub fn cargo_build(
     firmware_dir: &Path,
     bin: &str,
@@ -87,6 +90,7 @@ pub fn cargo_build(
     scene: Option<&Path>,
     model: Option<Model>,
     mode: Option<Mode>,
+    planned: Option<Option<f32>>,
 ) -> Result<PathBuf> {
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
     let mut cmd = Command::new(cargo);
@@ -121,6 +125,11 @@ pub fn cargo_build(
     match mode {
         Some(m) => cmd.env("SSVR_MODE", m.name()),
         None => cmd.env_remove("SSVR_MODE"),
+    };
+    match planned {
+        Some(Some(a)) => cmd.env("SSVR_PLANNED_START", format!("{:08x}", a.to_bits())),
+        Some(None) => cmd.env("SSVR_PLANNED_START", "none"),
+        None => cmd.env_remove("SSVR_PLANNED_START"),
     };
     let out = cmd
         .output()
@@ -277,6 +286,13 @@ pub fn build_for_scene_mode(
     let scene_file = scene_file
         .canonicalize()
         .with_context(|| format!("no scene file at {}", scene_file.display()))?;
+    // (The firmware's scene file has no input: the planned start goes by itself.)
+    let input = scene.input_motion();
+    let planned = Some(ssvr_proto::plan::planned_start(
+        &scene.estimator.params,
+        scene.rate_hz,
+        |t| input.accel(t),
+    ));
     let built = cargo_build(
         firmware_dir,
         QEMU_BIN,
@@ -284,6 +300,7 @@ pub fn build_for_scene_mode(
         Some(&scene_file),
         Some(model),
         Some(mode),
+        planned,
     )?;
     let qemu_elf = out_dir.join(format!("{QEMU_BIN}.elf"));
     std::fs::copy(&built, &qemu_elf)
@@ -296,6 +313,7 @@ pub fn build_for_scene_mode(
             Some(&scene_file),
             Some(model),
             Some(mode),
+            planned,
         ) {
             Ok(built) => {
                 let elf = out_dir.join(format!("{BOARD_BIN}.elf"));

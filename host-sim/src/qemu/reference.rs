@@ -305,6 +305,10 @@ impl Reference {
                         b.note_open_start(&[top as f32], &[y as f32]);
                     }
                     b.push_run(&[base], &[top as f32]);
+                    // (Predict mode without a rest: the table's start, for its offset.)
+                    if *predict && b.open_start() > 0 {
+                        b.note_table_start(&[table]);
+                    }
                     let level = est.phase().level();
                     let before = b.mu_for(level);
                     let scale = b.top_scale();

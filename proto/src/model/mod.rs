@@ -15,7 +15,10 @@ mod rectangular;
 mod stick_slip;
 mod tuning;
 
-pub use base_tuning::{BaseSlot, BaseTuning, SlipStart, PREDICT_BREAKAWAY_WEIGHT};
+pub use base_tuning::{
+    open_start_samples, BaseSlot, BaseTuning, SlipStart, MAX_TABLE_START_OFFSET, MIN_OPEN_START,
+    OPEN_START_RAD, PREDICT_BREAKAWAY_WEIGHT,
+};
 pub use friction::{FrictionReport, FrictionSlot, SlipFriction};
 pub use rectangular::RectangularModel;
 pub use stick_slip::{FixedBaseModel, StickSlipF32, StickSlipLawModel, StickSlipModel};

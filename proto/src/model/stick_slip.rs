@@ -370,12 +370,10 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
     /// the measured top less its identified offset, and the top accelerometer's tuning.
     #[inline(always)]
     fn predict_run_base(&mut self, frames: &mut [Frame], from: usize) {
-        // (Fuse mode without a rest: a run is split at the open-loop start's end, where the top
-        // offset may be adopted, so that every batching adopts it at the same sample.)
-        let open = match self.base_tuning.get() {
-            Some(bt) if self.fuse => bt.open_start(),
-            _ => 0,
-        };
+        // (Without a rest: a run is split at the open-loop start's end, where the top offset
+        // (fuse mode) or the table's (predict mode) may be adopted, so that every batching
+        // adopts it at the same sample.)
+        let open = self.base_tuning.get().map_or(0, BaseTuning::open_start);
         if open > 0 && open < frames.len() {
             let (first, rest) = frames.split_at_mut(open);
             self.predict_run_base(first, from);
@@ -415,7 +413,7 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
             *u = t - off;
         }
         let n = frames.len();
-        if open > 0 {
+        if open > 0 && fuse {
             // (The open-loop start: no stuck-phase observer.)
             top.iter_mut().take(open.min(n)).for_each(|y| *y = f32::NAN);
         }
@@ -427,11 +425,16 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
                 for (f, &p) in frames.iter_mut().zip(pred.iter()) {
                     f.prediction = p;
                 }
-                if open > 0 {
+                if open > 0 && fuse {
                     bt.note_open_start(measured, pred);
                 }
             }
             bt.push_run(good, measured);
+        }
+        if open > 0 && !fuse {
+            // (Predict mode's table start: an offset found at its end is removed from the next
+            // run on, as from the next sample one at a time.)
+            bt.note_table_start(table);
         }
         let before = bt.mu_for(level);
         // (The run's top scale: a change from the check's adoptions reaches the tuning from the

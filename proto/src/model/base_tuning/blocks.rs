@@ -111,7 +111,7 @@ impl BaseTuning {
             self.filled += 1;
             return;
         }
-        self.id.push_block(old.base, old.level);
+        self.id.push_block(old.base - self.id_shift, old.level);
         if self.fuse && old.level != 0 && (old.base - old.top).is_finite() {
             self.top_fit.add(&[old.base, sign(old.level), 1.0], old.top);
         }

@@ -52,6 +52,7 @@ mod top;
 
 pub use slot::BaseSlot;
 use top::OpenStart;
+pub use top::{open_start_samples, MAX_TABLE_START_OFFSET, MIN_OPEN_START, OPEN_START_RAD};
 
 /// Most blocks that wait for late events before they are used: as many as cover the detector's
 /// longest reporting delay (the plan's `max_age`) and [`GUARD`], plus one, up to this many (at
@@ -131,11 +132,15 @@ pub struct BaseTuning {
     /// Fuse mode: only the offsets (the top accelerometer's from `top_fit`) and M.
     fuse: bool,
     zeroed: bool,
+    /// The table's offset is known: zeroed on a rest, or found at predict mode's table start
+    /// (a fit from one direction of sliding then takes the offset in use as right).
+    offset_known: bool,
     /// μ is known from both directions (adopted, or the one in use confirmed).
     mu_known: bool,
-    /// Fuse mode without a rest: the top offset from the first samples ([`OpenStart`]).
-    start: OpenStart,
     id: SlidingIdentifier<f32>,
+    /// Without a rest, the first samples ([`OpenStart`]): fuse mode's top offset, predict mode's
+    /// table offset.
+    start: OpenStart,
     /// The blocks waiting for late events (`at`: the slot of the next, `filled` of them), in
     /// the first `wait` slots: the blocks that cover the detector's longest delay.
     ring: [Block; BLOCKS],
@@ -166,6 +171,11 @@ pub struct BaseTuning {
     /// [`Self::m1_in_use`]), and the prior's √M.
     mass: MassFit,
     prior_root_m: f32,
+    /// What is removed from the base's blocks before the sliding identification: predict
+    /// mode's table offset from the table's start (its fits' offsets are then what is left).
+    id_shift: f32,
+    /// The plan's table acceleration at the input's start ([`Self::with_planned_start`]).
+    planned_start: f32,
     /// The prior's μ/μs: a slip start's breakaway coefficient times it is the slide's μ
     /// ([`Self::slip_start`]).
     mu_per_mu_s: f32,
@@ -240,17 +250,44 @@ impl BaseTuning {
             countdown: FIRST_CHECK_EVERY,
             last: None,
             zeroed,
+            offset_known: zeroed,
+            id_shift: 0.0,
+            planned_start: f32::NAN,
             fuse,
             top_fit: PagedNormal::new(FORGETTING_PER_ROW),
             top_offset: 0.0,
             top_offset_std_use: 0.0,
-            start: OpenStart::new(fuse && !zeroed, &params, rate),
+            start: {
+                // (Predict mode's is armed by a planned start: `with_planned_start`.)
+                let mut start = OpenStart::new(!zeroed, &params, rate);
+                if !fuse {
+                    start.off();
+                }
+                start
+            },
             top_scale: 1.0,
             top_gain_std_use: 0.0,
             mass: MassFit::default(),
             prior_root_m: root_m as f32,
             id,
         })
+    }
+
+    /// Predict mode: the planned table acceleration at the input's start,
+    /// [`Plan::planned_start_m_s2`](crate::Plan::planned_start_m_s2) (`None`: not planned). The
+    /// table's start ([`Self::note_table_start`]) needs it: without a plan a start that is not
+    /// at rest cannot be told from an offset (El Centro's record starts at 0.06 m/s²), and
+    /// there is none.
+    pub fn with_planned_start(mut self, accel: Option<f32>) -> Self {
+        self.planned_start = accel.unwrap_or(f32::NAN);
+        if !self.fuse {
+            if self.planned_start.is_finite() {
+                self.start.arm();
+            } else {
+                self.start.off();
+            }
+        }
+        self
     }
 
     /// The change of [`Self::top_of`] in phase `level` when its friction coefficient went from
@@ -344,7 +381,7 @@ impl BaseTuning {
             self.adopt_top(None);
             return (None, None);
         }
-        let estimate = self.id.estimate(self.zeroed);
+        let estimate = self.id.estimate(self.offset_known);
         if let Some(e) = &estimate {
             self.adopt_offset(e);
         }
@@ -448,12 +485,14 @@ impl BaseTuning {
         let known = mu > 0.5 * self.prior_mu
             && mu < 2.0 * self.prior_mu
             && e.friction_accel_std / (self.g as f64) < MAX_REL_STD_MU_OFFSET * mu;
-        let change = libm::fabs(e.offset - self.offset as f64);
+        // (The fit's offset is what is left after `id_shift`.)
+        let offset = e.offset + self.id_shift as f64;
+        let change = libm::fabs(offset - self.offset as f64);
         if known
             && e.offset_std > 0.0
             && (change > 3.0 * e.offset_std || e.offset_std < 0.5 * self.offset_std_use)
         {
-            self.offset = e.offset as f32;
+            self.offset = offset as f32;
             self.offset_std_use = e.offset_std;
         }
     }

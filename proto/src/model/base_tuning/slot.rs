@@ -51,7 +51,10 @@ impl BaseSlot for Option<BaseTuning> {
             plan.mode == crate::model::Mode::Fuse,
             plan.max_age,
         )
-        .map(|b| b.with_static_friction(plan.specimen.static_friction_coefficient))
+        .map(|b| {
+            b.with_static_friction(plan.specimen.static_friction_coefficient)
+                .with_planned_start(plan.planned_start_m_s2)
+        })
     }
     #[inline(always)]
     fn get(&self) -> Option<&BaseTuning> {

@@ -53,44 +53,125 @@ pub const LEVEL_SIGMAS: f64 = 5.0;
 #[derive(Debug, Clone)]
 pub(super) struct OpenStart {
     /// Samples of the start still to come (0: none, or done), and the index of its second
-    /// half's first.
+    /// half's first; its length.
     left: u32,
     half: u32,
-    /// Σ r (r = measured − predicted) and its count, over the start and its first half.
+    len: u32,
+    /// Σ r (r = measured − predicted; predict mode's table start: the measured table) and its
+    /// count, over the start and its first half; Σ k, Σ k², Σ k·r (k: the sample's index in
+    /// the start) for the table's line.
     sum: f32,
     n: u32,
     sum_first: f32,
     n_first: u32,
-    /// Σ of the squared differences of consecutive r (the noise, free of a smooth trend), their
-    /// count, and the last r.
+    sum_k: f32,
+    sum_k2: f32,
+    sum_kr: f32,
+    /// Σ of the consecutive differences of r and of their squares (the noise, free of a
+    /// smooth trend), their count, and the last r.
+    sum_d: f32,
     sum_d2: f32,
     n_d: u32,
     last: f32,
 }
 
 impl OpenStart {
-    /// The start of the prior `params` at `rate` (`on`: fuse mode without a rest); at least
-    /// one sample.
+    /// The start of the prior `params` at `rate` (`on`: fuse mode without a rest, or predict
+    /// mode's table start); at least [`MIN_OPEN_START`] samples, or none.
     pub(super) fn new(on: bool, params: &StructureParams, rate: f64) -> Self {
-        let p = 2.0 * core::f64::consts::PI * params.natural_frequency_hz;
-        let n = libm::floor(OPEN_START_RAD * rate / p);
-        // (Too few samples to tell a level from noise or a trend: none.)
-        let left = if on && n.is_finite() && n >= MIN_OPEN_START as f64 {
-            n.min(1e4) as u32
+        let left = if on {
+            open_start_samples(params, rate)
         } else {
             0
         };
         Self {
             left,
             half: left / 2,
+            len: left,
             sum: 0.0,
             n: 0,
             sum_first: 0.0,
             n_first: 0,
+            sum_k: 0.0,
+            sum_k2: 0.0,
+            sum_kr: 0.0,
+            sum_d: 0.0,
             sum_d2: 0.0,
             n_d: 0,
             last: f32::NAN,
         }
+    }
+
+    /// No start (none to come; [`Self::arm`] brings it back before its first sample).
+    pub(super) fn off(&mut self) {
+        self.left = 0;
+    }
+
+    /// The start to come, of its length (none if it had none).
+    pub(super) fn arm(&mut self) {
+        self.left = self.len;
+    }
+
+    /// Samples of the start still to come.
+    pub(super) fn left(&self) -> u32 {
+        self.left
+    }
+
+    /// Add the start's next samples r = `a` − `b` (`a` alone without `b`; a missing one not
+    /// finite); returns whether the start ended with them.
+    pub(super) fn note(&mut self, a: &[f32], b: Option<&[f32]>) -> bool {
+        if self.left == 0 {
+            return false;
+        }
+        let len = b.map_or(a.len(), |b| b.len().min(a.len()));
+        let r = (0..len).map(|i| {
+            let x = a.get(i).copied().unwrap_or(f32::NAN);
+            match b {
+                Some(b) => x - b.get(i).copied().unwrap_or(f32::NAN),
+                None => x,
+            }
+        });
+        for r in r {
+            if self.left == 0 {
+                break;
+            }
+            if r.is_finite() {
+                if self.last.is_finite() {
+                    let d = r - self.last;
+                    (self.sum_d, self.sum_d2, self.n_d) =
+                        (self.sum_d + d, self.sum_d2 + d * d, self.n_d + 1);
+                }
+                let k = (self.len - self.left) as f32;
+                (self.sum, self.n) = (self.sum + r, self.n + 1);
+                (self.sum_k, self.sum_k2, self.sum_kr) =
+                    (self.sum_k + k, self.sum_k2 + k * k, self.sum_kr + k * r);
+                if self.left > self.half {
+                    (self.sum_first, self.n_first) = (self.sum_first + r, self.n_first + 1);
+                }
+            }
+            self.last = r;
+            self.left -= 1;
+        }
+        self.left == 0
+    }
+
+    /// The noise of one sample from the consecutive differences (free of a smooth trend; with
+    /// `trend`, of a line's too: their mean left out).
+    fn noise(&self, trend: bool) -> Option<f64> {
+        let n_d = self.n_d as f64;
+        let ss = if trend {
+            if self.n_d < 2 {
+                return None;
+            }
+            let m = self.sum_d as f64 / n_d;
+            (self.sum_d2 as f64 - n_d * m * m) / (n_d - 1.0)
+        } else {
+            if self.n_d == 0 {
+                return None;
+            }
+            self.sum_d2 as f64 / n_d
+        };
+        Some(libm::sqrt(libm::fmax(ss, 0.0) / 2.0))
     }
 
     /// The offset and its standard deviation, if the start was at rest: the residual a
@@ -101,10 +182,10 @@ impl OpenStart {
     fn offset(&self) -> Option<(f64, f64)> {
         let (n, n1) = (self.n as f64, self.n_first as f64);
         let n2 = n - n1;
-        if n1 < 1.0 || n2 < 1.0 || self.n_d == 0 {
+        if n1 < 1.0 || n2 < 1.0 {
             return None;
         }
-        let noise = libm::sqrt(self.sum_d2 as f64 / (2.0 * self.n_d as f64));
+        let noise = self.noise(false)?;
         let (m1, m2) = (
             self.sum_first as f64 / n1,
             (self.sum - self.sum_first) as f64 / n2,
@@ -114,7 +195,45 @@ impl OpenStart {
         let level = libm::fabs(m1 - m2) <= LEVEL_SIGMAS * noise * libm::sqrt(1.0 / n1 + 1.0 / n2);
         (level && sd > 0.0 && libm::fabs(mean) > 3.0 * sd).then_some((mean, sd))
     }
+
+    /// Predict mode's table start: the table accelerometer's offset and its standard
+    /// deviation, the intercept at the input's first sample of the least-squares line through
+    /// the measured table acceleration less the `planned` one's (the same line through the
+    /// planned input: a record's first acceleration, and the line's miss of a sine's start,
+    /// cancel), taken when 3σ from 0 and at most [`MAX_TABLE_START_OFFSET`] (not a NaN
+    /// `planned`). A missing sample leaves the measured line through the others: the planned
+    /// input's curvature over 0.1 rad then moves it by far less than the noise.
+    fn line_offset(&self, planned: f64) -> Option<(f64, f64)> {
+        let n = self.n as f64;
+        let (sk, skk) = (self.sum_k as f64, self.sum_k2 as f64);
+        let det = n * skk - sk * sk;
+        if self.n < MIN_OPEN_START || det.is_nan() || det <= 0.0 {
+            return None;
+        }
+        let b = (skk * self.sum as f64 - sk * self.sum_kr as f64) / det - planned;
+        let sd = self.noise(true)? * libm::sqrt(skk / det);
+        (sd > 0.0 && libm::fabs(b) > 3.0 * sd && libm::fabs(b) <= MAX_TABLE_START_OFFSET)
+            .then_some((b, sd))
+    }
 }
+
+/// The open-loop start's length at `rate` for the prior `params`: its first [`OPEN_START_RAD`]
+/// of p, at most 10⁴ samples; none (0) below [`MIN_OPEN_START`] (too few samples to tell a
+/// level from noise or a trend).
+pub fn open_start_samples(params: &StructureParams, rate: f64) -> u32 {
+    let p = 2.0 * core::f64::consts::PI * params.natural_frequency_hz;
+    let n = libm::floor(OPEN_START_RAD * rate / p);
+    if n.is_finite() && n >= MIN_OPEN_START as f64 {
+        n.min(1e4) as u32
+    } else {
+        0
+    }
+}
+
+/// Largest table offset predict mode's table start takes (m/s²): 0.1 g, twice the largest a lab
+/// accelerometer is expected to show (a table that does not follow the plan at its start is
+/// not taken for an offset beyond it).
+pub const MAX_TABLE_START_OFFSET: f64 = 0.1 * 9.80665;
 
 impl BaseTuning {
     /// The top accelerometer's offset in use (m/s², fuse mode; 0 in predict mode).
@@ -135,11 +254,12 @@ impl BaseTuning {
         (m - self.top_offset) * self.top_scale
     }
 
-    /// Fuse mode: how many of the next samples are in the open-loop start (`OpenStart`: the
-    /// model's top input NaN).
+    /// How many of the next samples are in the open-loop start (`OpenStart`; fuse mode: the
+    /// model's top input NaN, [`Self::note_open_start`]; predict mode: the table's start,
+    /// [`Self::note_table_start`]).
     #[inline(always)]
     pub fn open_start(&self) -> usize {
-        self.start.left as usize
+        self.start.left() as usize
     }
 
     /// The open-loop start's `measured` top accelerations and the model's predictions `pred` of
@@ -147,31 +267,33 @@ impl BaseTuning {
     /// mean difference, known to its standard error.
     #[inline(never)]
     pub fn note_open_start(&mut self, measured: &[f32], pred: &[f32]) {
-        let s = &mut self.start;
-        let k = measured.len().min(pred.len()).min(s.left as usize);
-        for (&m, &p) in measured.iter().zip(pred).take(k) {
-            let r = m - p;
-            if r.is_finite() {
-                if s.last.is_finite() {
-                    let d = r - s.last;
-                    (s.sum_d2, s.n_d) = (s.sum_d2 + d * d, s.n_d + 1);
-                }
-                (s.sum, s.n) = (s.sum + r, s.n + 1);
-                if s.left > s.half {
-                    (s.sum_first, s.n_first) = (s.sum_first + r, s.n_first + 1);
-                }
-            }
-            s.last = r;
-            s.left -= 1;
-        }
-        if s.left > 0 {
+        if !self.start.note(measured, Some(pred)) {
             return;
         }
         // Adopted like the momentum balance's (3σ from the prior's 0), which later replaces it
         // when better known or different.
-        if let Some((mean, sd)) = s.offset() {
+        if let Some((mean, sd)) = self.start.offset() {
             self.top_offset = mean as f32;
             self.top_offset_std_use = sd;
+        }
+    }
+
+    /// Predict mode without a rest: the run's first [`Self::open_start`] samples of the table
+    /// acceleration `table` (the model's input, before any offset is removed). At the start's
+    /// end, a table offset found is taken as the offset in use, known from then on: it is
+    /// removed from the base's samples before the sliding identification, whose fits from one
+    /// direction of sliding then give μ itself instead of μ and the offset as one constant
+    /// (`offset_known`), and later estimates from both directions replace it like any other.
+    #[inline(never)]
+    pub fn note_table_start(&mut self, table: &[f32]) {
+        if !self.start.note(table, None) {
+            return;
+        }
+        if let Some((b, sd)) = self.start.line_offset(self.planned_start as f64) {
+            self.offset = b as f32;
+            self.id_shift = self.offset;
+            self.offset_std_use = sd;
+            self.offset_known = true;
         }
     }
 
@@ -257,7 +379,8 @@ mod tests {
     }
 
     /// The start's length is the first 0.1 rad of p (22 samples at 7 Hz and 10 kHz; none below
-    /// 10 samples); only fuse mode without a rest has one.
+    /// 10 samples); only fuse mode without a rest has one, and predict mode's with a planned
+    /// start.
     #[test]
     fn the_open_start_is_fuse_mode_without_a_rest() {
         let b = |zeroed, fuse, rate| {
@@ -271,6 +394,15 @@ mod tests {
         assert_eq!(b(false, true, 200.0), 0);
         assert_eq!(b(true, true, 10_000.0), 0);
         assert_eq!(b(false, false, 10_000.0), 0);
+        let planned = |zeroed, rate| {
+            BaseTuning::new(params(), rate, zeroed, false, 37)
+                .unwrap()
+                .with_planned_start(Some(0.0))
+                .open_start()
+        };
+        assert_eq!(planned(false, 10_000.0), 22);
+        assert_eq!(planned(false, 4_000.0), 0);
+        assert_eq!(planned(true, 10_000.0), 0);
     }
 
     /// Measured − predicted over the start, in runs of any length (a missing sample skipped):
@@ -319,5 +451,51 @@ mod tests {
         b.note_open_start(&measured, &[0.0; 22]);
         assert_eq!(b.open_start(), 0);
         assert_eq!((b.top_offset(), b.top_offset_std_use), (0.0, 0.0));
+    }
+
+    /// Predict mode's table start (no rest, a planned start): the measured table's line less
+    /// the plan's, in runs of any length (a missing sample skipped). An offset of ±0.05 m/s²
+    /// under 5e-3 m/s² of noise on a planned ramp from 0.06 m/s² comes out within 2σ (σ of the
+    /// intercept from 22 samples: 0.41 × the noise) and is taken with that σ, the fits from one
+    /// direction of sliding then told it is known; none without one (3σ), beyond 0.1 g, or
+    /// without a plan (no start).
+    #[test]
+    fn the_table_start_gives_the_table_offset() {
+        let planned = |k: usize| 0.06 + 8e-3 * k as f32;
+        for offset in [0.05f32, -0.05, 0.0, 1.2] {
+            let mut b = BaseTuning::new(params(), 10_000.0, false, false, 37)
+                .unwrap()
+                .with_planned_start(Some(0.06));
+            let n = b.open_start();
+            assert_eq!(n, 22);
+            let mut table: [f32; 40] =
+                core::array::from_fn(|k| planned(k) + offset + noise(k as u32, 5e-3));
+            table[5] = f32::NAN;
+            // Samples after the start: never read.
+            table[n..].iter_mut().for_each(|m| *m = 1e3);
+            let mut at = 0;
+            for len in [3usize, 16, 21] {
+                let to = (at + len).min(40);
+                b.note_table_start(&table[at..to]);
+                at = to;
+            }
+            assert_eq!(b.open_start(), 0);
+            let (found, sd) = (b.offset(), b.offset_std_use);
+            if offset == 0.0 || offset > 1.0 {
+                assert_eq!((found, sd, b.offset_known), (0.0, 0.0, false), "{offset}");
+            } else {
+                assert!(sd > 1.5e-3 && sd < 3e-3, "σ {sd}");
+                assert!(
+                    (found - offset).abs() < 2.0 * sd as f32,
+                    "{found} for {offset}"
+                );
+                assert!(b.offset_known && b.id_shift == found);
+            }
+        }
+        // No plan, or a rest: no start; fuse mode's start is the top's.
+        let none = BaseTuning::new(params(), 10_000.0, false, false, 37).unwrap();
+        assert_eq!(none.with_planned_start(None).open_start(), 0);
+        let rest = BaseTuning::new(params(), 10_000.0, true, false, 37).unwrap();
+        assert_eq!(rest.with_planned_start(Some(0.0)).open_start(), 0);
     }
 }
