@@ -22,7 +22,7 @@
 //! `SSVR_MODE`, `SSVR_PLANNED_START` and `rerun-if-changed=<scene>`.
 
 use ssvr_proto::{DetectorPlan, Mode, ModelKind, Plan};
-use ssvr_scene::{Scene, Specimen};
+use ssvr_scene::Specimen;
 use std::env;
 use std::fmt::Write as _;
 use std::fs;
@@ -102,28 +102,46 @@ fn main() {
         .unwrap_or_else(|e| panic!("scene {}: {e} (model {})", path.display(), model.name()))
         .with_mode(mode)
         .with_rest(specimen.start_s);
-    // The planned input's start, as the host plans it (`host_sim::pipeline::plan_for_mode`):
-    // `SSVR_PLANNED_START` (host-sim's builds: the f32's bits in hex, or `none`), else the
-    // scene file's own input (a whole scene: the default table1.toml), else none.
+    // The planned input's start, as the host plans it (`host_sim::pipeline::plan_for_mode`:
+    // predict mode without a rest only): `SSVR_PLANNED_START` (host-sim's builds: the two f32s'
+    // bits in hex, `accel,rise`, or `none`), else the scene file's own input (a whole scene: the
+    // default table1.toml; a specimen file, as host-sim writes, has none), else none.
     println!("cargo:rerun-if-env-changed=SSVR_PLANNED_START");
-    plan.planned_start_m_s2 = match env::var("SSVR_PLANNED_START") {
-        Ok(v) if v == "none" => None,
-        Ok(v) => Some(f32::from_bits(u32::from_str_radix(&v, 16).unwrap_or_else(
-            |e| panic!("SSVR_PLANNED_START: {v:?} is not an f32's bits in hex ({e})"),
-        ))),
-        Err(_) => Scene::load(&path).ok().and_then(|s| {
-            let input = s.input_motion();
-            ssvr_proto::plan::planned_start(
-                &plan.specimen.structure,
-                plan.specimen.sample_rate_hz,
-                |t| input.accel(t),
-            )
-        }),
-    };
+    match env::var("SSVR_PLANNED_START") {
+        Ok(v) if v.is_empty() => plan = planned_from_scene(plan, &path),
+        Ok(v) if v == "none" => plan.planned_start = None,
+        Ok(v) => {
+            let bits = |s: Option<&str>| {
+                s.and_then(|s| u32::from_str_radix(s, 16).ok())
+                    .map(f32::from_bits)
+                    .unwrap_or_else(|| {
+                        panic!("SSVR_PLANNED_START: {v:?} is not `accel,rise` in hex")
+                    })
+            };
+            let mut it = v.split(',');
+            plan.planned_start = Some(ssvr_proto::PlannedStart {
+                accel_m_s2: bits(it.next()),
+                rise_per_sample_m_s2: bits(it.next()),
+            });
+        }
+        Err(_) => plan = planned_from_scene(plan, &path),
+    }
     fs::write(out.join("plan.rs"), plan_consts(&path, &plan)).expect("write OUT_DIR/plan.rs");
     if board {
         fs::write(out.join("scene_board.rs"), board_consts(&path, &specimen))
             .expect("write OUT_DIR/scene_board.rs");
+    }
+}
+
+/// `plan` with the planned input of the scene file at `path`, if it is a whole scene (a specimen
+/// file has no input: none).
+fn planned_from_scene(plan: Plan, path: &Path) -> Plan {
+    match ssvr_scene::Scene::load(path) {
+        Ok(s) => {
+            let input = s.input_motion();
+            plan.with_planned_input(|t| input.accel(t))
+        }
+        Err(_) => plan,
     }
 }
 

@@ -151,9 +151,12 @@ pub fn run() -> ! {
     // Cost of the estimator and the detector in core clock cycles (SysTick on the core clock),
     // with feature `bench` only (a development build: 3–6 KB of flash).
     #[cfg(feature = "bench")]
-    if let (Ok(m), Ok(d)) = (plan::model(&plan), plan::detector(&plan)) {
-        let mut ticks = bench::Ticks::new(cp.SYST);
-        bench::run(&mut ticks, &plan, m, d);
+    {
+        let bench_plan = bench::plan_for(&plan);
+        if let (Ok(m), Ok(d)) = (plan::model(&bench_plan), plan::detector(&bench_plan)) {
+            let mut ticks = bench::Ticks::new(cp.SYST);
+            bench::run(&mut ticks, &bench_plan, m, d);
+        }
     }
     #[cfg(not(feature = "bench"))]
     let _ = cp;

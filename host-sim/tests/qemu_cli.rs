@@ -111,9 +111,9 @@ fn check_common(v: &Value, samples: u64) {
     assert!(num(v, "reversals") >= 1.0);
     assert!(num(v, "flash_bytes") > 0.0 && num(v, "ram_bytes") > 0.0);
     assert!(num(v, "board_flash_bytes") <= num(&v["goals"], "board_flash_budget_bytes"));
-    // Measured 83 200 B (stick-slip, fuse, Coulomb, with the offsets' identification from the
+    // Measured 84 152 B (stick-slip, fuse, Coulomb, with the offsets' identification from the
     // sliding phases and the open-loop starts (the top's, and predict mode's table start against
-    // the plan: +1.5 KB), the table's gain against the displacement, the
+    // the plan with its state correction: +2.4 KB), the table's gain against the displacement, the
     // top's gain from the stuck phases, f and ξ from the input's start, the first slides'
     // friction from the slip starts and the M of either mode: 51 172 B without them; the
     // velocity-dependent law is compiled in only for a scene with one); the budget is 96 KiB,

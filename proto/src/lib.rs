@@ -49,7 +49,7 @@ pub use model::{
     StickSlipLawModel, StickSlipModel,
 };
 pub use pipeline::{EventSource, Pipeline, Stats, Step, BATCH};
-pub use plan::{DetectorPlan, Plan, PlanError, Specimen};
+pub use plan::{DetectorPlan, Plan, PlanError, PlannedStart, Specimen};
 
 /// The Table 1 specimen, the prior of the crate's unit tests.
 #[cfg(test)]

@@ -114,22 +114,31 @@ pub struct Plan {
     /// Samples of rest before the input (the planned input's start): the accelerometers are
     /// zeroed on them ([`crate::zeroing`]).
     pub rest_samples: u32,
-    /// The planned table acceleration at the input's start (m/s²): the intercept of the
-    /// least-squares line through the planned input over the open-loop start's samples
-    /// ([`open_start_samples`]); predict mode without a rest takes the table accelerometer's
-    /// offset as the measured line's intercept less it. `None`: not planned (a replay).
-    pub planned_start_m_s2: Option<f32>,
+    /// The planned table acceleration's line at the input's start ([`PlannedStart`]): predict
+    /// mode without a rest takes the table accelerometer's offset as the measured line's
+    /// intercept less its. `None`: not planned (a replay), or not used (fuse mode, a rest).
+    pub planned_start: Option<PlannedStart>,
 }
 
-/// The planned table acceleration at the input's start for the prior `params` at `rate`
-/// ([`Plan::planned_start_m_s2`]): the intercept of the least-squares line through
-/// `accel(k/rate)` over the first [`open_start_samples`] samples (`None` if there are none or
-/// it is not finite).
+/// The least-squares line through the planned table acceleration over the open-loop start's
+/// samples ([`open_start_samples`]), from the input's first sample ([`planned_start`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PlannedStart {
+    /// Its value at the input's first sample (m/s²).
+    pub accel_m_s2: f32,
+    /// Its rise per sample (m/s²): what a lag of one sample between the plan and the table
+    /// moves the measured intercept by.
+    pub rise_per_sample_m_s2: f32,
+}
+
+/// The planned table acceleration's line at the input's start for the prior `params` at
+/// `rate` ([`PlannedStart`]): the least-squares line through `accel(k/rate)` over the first
+/// [`open_start_samples`] samples (`None` if there are none or it is not finite in f32).
 pub fn planned_start(
     params: &StructureParams,
     rate: f64,
     accel: impl Fn(f64) -> f64,
-) -> Option<f32> {
+) -> Option<PlannedStart> {
     let n = open_start_samples(params, rate);
     let (mut s, mut sk, mut skk, mut sy, mut sky) = (0.0, 0.0, 0.0, 0.0, 0.0);
     for k in 0..n {
@@ -137,14 +146,20 @@ pub fn planned_start(
         (s, sk, skk, sy, sky) = (s + 1.0, sk + k, skk + k * k, sy + y, sky + k * y);
     }
     let det = s * skk - sk * sk;
-    let b = (skk * sy - sk * sky) / det;
-    (det > 0.0 && b.is_finite()).then_some(b as f32)
+    if det.is_nan() || det <= 0.0 {
+        return None;
+    }
+    let p = PlannedStart {
+        accel_m_s2: ((skk * sy - sk * sky) / det) as f32,
+        rise_per_sample_m_s2: ((s * sky - sk * sy) / det) as f32,
+    };
+    (p.accel_m_s2.is_finite() && p.rise_per_sample_m_s2.is_finite()).then_some(p)
 }
 
 /// Version of the word layout ([`Plan::to_words`]).
-pub const WORDS_VERSION: u32 = 5;
+pub const WORDS_VERSION: u32 = 6;
 /// Length of a plan's words.
-pub const WORDS: usize = 51 + COEFFICIENT_WORDS;
+pub const WORDS: usize = 52 + COEFFICIENT_WORDS;
 
 impl Plan {
     /// The plan of `specimen` and `model`: every setting validated by the library.
@@ -198,7 +213,7 @@ impl Plan {
             coefficients: coefficients.to_bits(),
             mode: Mode::Fuse,
             rest_samples: 0,
-            planned_start_m_s2: None,
+            planned_start: None,
         })
     }
 
@@ -233,11 +248,19 @@ impl Plan {
     }
 
     /// This plan with its planned table acceleration `accel(t)` (m/s², t in s from the input's
-    /// start): [`Self::planned_start_m_s2`], the intercept of the least-squares line through
-    /// its first [`open_start_samples`] samples (`None` if there are none or it is not finite).
+    /// start): [`Self::planned_start`] ([`planned_start`]) for a predict-mode plan without a
+    /// rest, the only one that uses it (none for the others, whose digests and images then do
+    /// not depend on the input). Call it after [`Self::with_mode`] and [`Self::with_rest`].
     pub fn with_planned_input(mut self, accel: impl Fn(f64) -> f64) -> Self {
-        let rate = self.specimen.sample_rate_hz;
-        self.planned_start_m_s2 = planned_start(&self.specimen.structure, rate, accel);
+        self.planned_start = if self.mode == Mode::Predict && self.rest_samples == 0 {
+            planned_start(
+                &self.specimen.structure,
+                self.specimen.sample_rate_hz,
+                accel,
+            )
+        } else {
+            None
+        };
         self
     }
 
@@ -333,11 +356,13 @@ impl Plan {
         }
         w.u32(self.mode as u32);
         w.u32(self.rest_samples);
-        // (Not planned: a NaN.)
-        w.u32(match self.planned_start_m_s2 {
-            Some(a) => a.to_bits(),
-            None => f32::NAN.to_bits(),
-        });
+        // (Not planned: NaNs.)
+        let (a, rise) = match self.planned_start {
+            Some(p) => (p.accel_m_s2, p.rise_per_sample_m_s2),
+            None => (f32::NAN, f32::NAN),
+        };
+        w.u32(a.to_bits());
+        w.u32(rise.to_bits());
         w.0
     }
 
@@ -423,9 +448,14 @@ impl Plan {
             return Err(PlanError::Words);
         };
         let rest_samples = r.u32();
-        let planned_start_m_s2 = match f32::from_bits(r.u32()) {
-            a if a.is_finite() => Some(a),
-            _ => None,
+        let (a, rise) = (f32::from_bits(r.u32()), f32::from_bits(r.u32()));
+        let planned_start = if a.is_finite() && rise.is_finite() {
+            Some(PlannedStart {
+                accel_m_s2: a,
+                rise_per_sample_m_s2: rise,
+            })
+        } else {
+            None
         };
         if r.i != WORDS {
             return Err(PlanError::Words);
@@ -442,7 +472,7 @@ impl Plan {
             coefficients,
             mode,
             rest_samples,
-            planned_start_m_s2,
+            planned_start,
         })
     }
 
@@ -536,34 +566,43 @@ mod tests {
         }
     }
 
-    /// The planned start: the intercept of the least-squares line through the planned input's
-    /// first `open_start_samples` samples; exact for a line, within A·(ω·T)³/30 of 0 for a sine
-    /// from rest (T the start's length), carried by the words; `None` without a plan.
+    /// The planned start: the least-squares line through the planned input's first
+    /// `open_start_samples` samples; exact for a line, within A·(ω·T)³/30 of 0 for a sine from
+    /// rest (T the start's length), carried by the words; only in a predict-mode plan without a
+    /// rest; `None` without a plan.
     #[test]
     fn the_plan_carries_the_planned_start() {
-        let plan = Plan::new(specimen(10_000.0), ModelKind::StickSlip).unwrap();
-        assert_eq!(plan.planned_start_m_s2, None);
+        let plan = Plan::new(specimen(10_000.0), ModelKind::StickSlip)
+            .unwrap()
+            .with_mode(Mode::Predict);
+        assert_eq!(plan.planned_start, None);
         assert_eq!(Plan::from_words(&plan.to_words()), Ok(plan));
         let line = plan.with_planned_input(|t| 0.06 + 3.0 * t);
-        let a = line.planned_start_m_s2.unwrap();
-        assert!((a - 0.06).abs() < 1e-6, "{a}");
+        let p = line.planned_start.unwrap();
+        assert!((p.accel_m_s2 - 0.06).abs() < 1e-6, "{p:?}");
+        assert!((p.rise_per_sample_m_s2 - 3e-4).abs() < 1e-9, "{p:?}");
         assert_eq!(Plan::from_words(&line.to_words()), Ok(line));
         assert_ne!(line.digest(), plan.digest());
-        // 2 m/s² at 7 Hz from rest: the start is 22 samples (0.1 rad of p), ω·T = 0.0154.
+        // 2 m/s² at 7 Hz from rest: the start is 22 samples (0.1 rad of p), ω·T = 0.097.
         let w = 2.0 * core::f64::consts::PI * 7.0;
         let sine = plan.with_planned_input(|t| 2.0 * libm::sin(w * t));
-        let a = sine.planned_start_m_s2.unwrap();
+        let a = sine.planned_start.unwrap().accel_m_s2;
         let n = open_start_samples(&plan.specimen.structure, 10_000.0);
         assert_eq!(n, 22);
         let bound = 2.0 * libm::pow(w * n as f64 / 10_000.0, 3.0) / 30.0;
         assert!((a as f64).abs() < 1.5 * bound, "{a} against {bound}");
-        // No start at 2 kHz (fewer than 10 samples), or a planned input that is not finite.
-        let coarse = Plan::new(specimen(2_000.0), ModelKind::StickSlip).unwrap();
-        assert_eq!(coarse.with_planned_input(|_| 1.0).planned_start_m_s2, None);
-        assert_eq!(
-            plan.with_planned_input(|_| f64::NAN).planned_start_m_s2,
-            None
-        );
+        // Only predict mode without a rest; no start at 2 kHz (fewer than 10 samples); none for
+        // a planned input that is not finite.
+        let fuse = Plan::new(specimen(10_000.0), ModelKind::StickSlip).unwrap();
+        assert_eq!(fuse.with_planned_input(|_| 1.0).planned_start, None);
+        let rest = plan.with_rest(0.5);
+        assert_eq!(rest.with_planned_input(|_| 1.0).planned_start, None);
+        let coarse = Plan::new(specimen(2_000.0), ModelKind::StickSlip)
+            .unwrap()
+            .with_mode(Mode::Predict);
+        assert_eq!(coarse.with_planned_input(|_| 1.0).planned_start, None);
+        assert_eq!(plan.with_planned_input(|_| f64::NAN).planned_start, None);
+        assert_eq!(plan.with_planned_input(|_| 1e300).planned_start, None);
     }
 
     #[test]

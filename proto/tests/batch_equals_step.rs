@@ -9,7 +9,7 @@ use ssvr_core::StructureParams;
 use ssvr_proto::log::LogReversal;
 use ssvr_proto::{
     flags, AccelerationDetector, DisplacementDetector, EventDetector, EventSource, FixedBaseModel,
-    Frame, FromPlan, Model, ModelKind, Pipeline, Plan, RectangularModel, Sample, Specimen,
+    Frame, FromPlan, Mode, Model, ModelKind, Pipeline, Plan, RectangularModel, Sample, Specimen,
     StickSlipModel, BATCH,
 };
 
@@ -76,7 +76,7 @@ fn compare<M: Model + FromPlan + Clone, D: EventDetector + Clone>(
     model: ModelKind,
     source: EventSource,
 ) {
-    compare_with::<M, D>(model, source, 0.0, [0.0; 3], false);
+    compare_with::<M, D>(model, source, 0.0, [0.0; 3], false, Mode::Fuse);
 }
 
 /// [`sample`] starting at rest: the accelerations faded in over the first 2 000 samples, the
@@ -94,15 +94,31 @@ fn sample_from_rest(k: usize) -> Sample {
 }
 
 /// [`compare`] with a rest of `rest_s` before the input and accelerometer offsets (`from_rest`:
-/// the signals of [`sample_from_rest`]).
+/// the signals of [`sample_from_rest`]), in `mode` (predict mode: the table's planned input
+/// the samples' own, less their offset).
 fn compare_with<M: Model + FromPlan + Clone, D: EventDetector + Clone>(
     model: ModelKind,
     source: EventSource,
     rest_s: f64,
     bias: [f32; 3],
     from_rest: bool,
+    mode: Mode,
 ) -> Pipeline<M, D> {
-    let plan = Plan::new(specimen(), model).unwrap().with_rest(rest_s);
+    let rate = specimen().sample_rate_hz;
+    let table = |t: f64| {
+        let k = (t * rate).round() as usize;
+        let s = if from_rest {
+            sample_from_rest(k)
+        } else {
+            sample(k)
+        };
+        f64::from(s.channels[0])
+    };
+    let plan = Plan::new(specimen(), model)
+        .unwrap()
+        .with_mode(mode)
+        .with_rest(rest_s)
+        .with_planned_input(table);
     let build = || -> Pipeline<M, D> {
         Pipeline::new(
             M::from_plan(&plan).unwrap(),
@@ -209,6 +225,7 @@ fn zeroed_offsets_batches_equal_single_steps() {
         0.05,
         bias,
         false,
+        Mode::Fuse,
     );
     compare_with::<RectangularModel, DisplacementDetector<64>>(
         ModelKind::Rectangular,
@@ -216,6 +233,7 @@ fn zeroed_offsets_batches_equal_single_steps() {
         0.05,
         bias,
         false,
+        Mode::Fuse,
     );
 }
 
@@ -231,6 +249,7 @@ fn an_open_start_batches_equal_single_steps() {
         0.0,
         bias,
         true,
+        Mode::Fuse,
     );
     let top = one.model().offsets()[2];
     assert!((top - 0.2).abs() < 5e-3, "top offset {top}");
@@ -344,4 +363,22 @@ fn two_slip_starts_in_a_batch_keep_their_own_sliding_sides() {
             assert!(a == &wa || (a.is_nan() && wa.is_nan()), "{got:?}");
         }
     }
+}
+
+/// Predict mode without a rest, starting at rest with a table offset: the table's offset is
+/// taken at the end of its start against the plan (`BaseTuning::note_table_start`), and the
+/// model's response to it removed from its state, at the same sample whatever the batching.
+#[test]
+fn a_table_start_batches_equal_single_steps() {
+    let bias = [0.2, 0.2, 0.0];
+    let one = compare_with::<StickSlipModel<H>, AccelerationDetector<64>>(
+        ModelKind::StickSlip,
+        EventSource::Detector,
+        0.0,
+        bias,
+        true,
+        Mode::Predict,
+    );
+    let table = one.model().offsets()[0];
+    assert!((table - 0.2).abs() < 5e-3, "table offset {table}");
 }

@@ -95,12 +95,51 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
         if !d.is_finite() {
             return;
         }
+        self.adjust_last(|s| {
+            s.z[0] += d;
+            s.y += d;
+        });
+    }
+
+    /// Remove from the last sample's state the fixed-base response to a constant table
+    /// acceleration `b` over the last `intervals` intervals, from rest: for an offset of the
+    /// table input found after the model has integrated it (predict mode's table start: 22
+    /// samples of a 0.49 m/s² offset left a free oscillation of ~0.05 m/s² in the stuck model,
+    /// which has no observer in predict mode). The open stuck map is affine in its input, so
+    /// the response is z ← z + A·z + (b0 + b1)·b from z = 0, composed in f64; the last sample's
+    /// stored input loses `b` too, the next interval's start. Only while stuck
+    /// (a slide since changed the map: nothing is done); a late event's re-simulation from an
+    /// earlier sample does not see it, as [`Self::shift_top`].
+    pub fn remove_input_offset(&mut self, b: T, intervals: u32) {
+        if !b.is_finite() || self.phase != 0 {
+            return;
+        }
+        let m = &self.open;
+        let (a, b0, b1) = (m.a.map(T::to_f64), m.b0.map(T::to_f64), m.b1.map(T::to_f64));
+        let (f0, f1) = ((b0[0] + b1[0]) * b.to_f64(), (b0[1] + b1[1]) * b.to_f64());
+        let mut z = [0.0f64; 2];
+        for _ in 0..intervals {
+            z = [
+                z[0] + (a[0] * z[0] + a[1] * z[1] + f0),
+                z[1] + (a[2] * z[0] + a[3] * z[1] + f1),
+            ];
+        }
+        let dz = z.map(T::from_f64);
+        // (The last sample's input too: the next interval starts from it.)
+        self.adjust_last(|s| {
+            s.z[0] -= dz[0];
+            s.z[1] -= dz[1];
+            s.u -= b;
+        });
+    }
+
+    /// Apply `f` to the last sample's slot (and the ring's copy of it).
+    fn adjust_last(&mut self, f: impl Fn(&mut super::estimator::Slot<T>)) {
         // (Right after a wrap of a ring without a copy slot, `at` is one before slot 0: the
         // last sample is in the last slot.)
         let at = if self.at < H { self.at } else { H - 1 };
         if let Some(s) = self.slots.get_mut(at) {
-            s.z[0] += d;
-            s.y += d;
+            f(s);
         }
         // The ring's copy of its last slot (slot 0, when it has one), either way.
         if self.first == 1 && at + 1 == H {

@@ -217,8 +217,9 @@ pub fn run() -> ! {
         exit(status::LOG_READ)
     }
 
-    match (plan::model(&plan), plan::detector(&plan)) {
-        (Ok(m), Ok(d)) => bench::run(&mut ticks, &plan, m, d),
+    let bench_plan = bench::plan_for(&plan);
+    match (plan::model(&bench_plan), plan::detector(&bench_plan)) {
+        (Ok(m), Ok(d)) => bench::run(&mut ticks, &bench_plan, m, d),
         _ => exit(status::STRUCTURE),
     }
     stack::report(&painted);

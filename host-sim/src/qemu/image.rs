@@ -80,9 +80,9 @@ pub fn build_qemu_image(firmware_dir: &Path) -> Result<PathBuf> {
 /// cargo), `SSVR_SCENE` set to `scene` (absolute) or removed, `SSVR_MODEL` set to `model`
 /// or removed (the firmware's default, rectangular), `SSVR_MODE` set to `mode` or removed
 /// (fuse), and `SSVR_PLANNED_START` set to `planned` (the plan's
-/// [`planned_start_m_s2`](ssvr_proto::Plan::planned_start_m_s2): its f32 bits in hex, or `none`)
-/// or removed (the firmware then plans the scene file's own input, if it has one). Returns the
-/// ELF.
+/// [`planned_start`](ssvr_proto::Plan::planned_start): its two f32s' bits in hex,
+/// `accel,rise`, or `none`) or removed (the firmware then plans the scene file's own input, if
+/// it has one). Returns the ELF.
 pub fn cargo_build(
     firmware_dir: &Path,
     bin: &str,
@@ -90,7 +90,7 @@ pub fn cargo_build(
     scene: Option<&Path>,
     model: Option<Model>,
     mode: Option<Mode>,
-    planned: Option<Option<f32>>,
+    planned: Option<Option<ssvr_proto::PlannedStart>>,
 ) -> Result<PathBuf> {
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
     let mut cmd = Command::new(cargo);
@@ -127,7 +127,14 @@ pub fn cargo_build(
         None => cmd.env_remove("SSVR_MODE"),
     };
     match planned {
-        Some(Some(a)) => cmd.env("SSVR_PLANNED_START", format!("{:08x}", a.to_bits())),
+        Some(Some(p)) => cmd.env(
+            "SSVR_PLANNED_START",
+            format!(
+                "{:08x},{:08x}",
+                p.accel_m_s2.to_bits(),
+                p.rise_per_sample_m_s2.to_bits()
+            ),
+        ),
         Some(None) => cmd.env("SSVR_PLANNED_START", "none"),
         None => cmd.env_remove("SSVR_PLANNED_START"),
     };
@@ -286,13 +293,9 @@ pub fn build_for_scene_mode(
     let scene_file = scene_file
         .canonicalize()
         .with_context(|| format!("no scene file at {}", scene_file.display()))?;
-    // (The firmware's scene file has no input: the planned start goes by itself.)
-    let input = scene.input_motion();
-    let planned = Some(ssvr_proto::plan::planned_start(
-        &scene.estimator.params,
-        scene.rate_hz,
-        |t| input.accel(t),
-    ));
+    // (The firmware's scene file has no input: the planned start, the host plan's, goes by
+    // itself.)
+    let planned = Some(crate::pipeline::plan_for_mode(scene, model, mode)?.planned_start);
     let built = cargo_build(
         firmware_dir,
         QEMU_BIN,

@@ -432,9 +432,7 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
             bt.push_run(good, measured);
         }
         if open > 0 && !fuse {
-            // (Predict mode's table start: an offset found at its end is removed from the next
-            // run on, as from the next sample one at a time.)
-            bt.note_table_start(table);
+            table_start(bt, &mut self.est, table, frames);
         }
         let before = bt.mu_for(level);
         // (The run's top scale: a change from the check's adoptions reaches the tuning from the
@@ -477,5 +475,29 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
                 t.set_top_scale(bt.top_scale());
             }
         }
+    }
+}
+
+/// Predict mode's table start over a run's `table` inputs, its flagged samples left out
+/// ([`BaseTuning::note_table_start`]): an offset found at its end is removed from the next run
+/// on (as from the next sample one at a time), and the model's response to it so far from the
+/// estimator's state. Out of line: it runs on the run's first samples only.
+#[cold]
+#[inline(never)]
+fn table_start<const H: usize>(
+    bt: &mut BaseTuning,
+    est: &mut StickSlipF32<H>,
+    table: &[f32],
+    frames: &[Frame],
+) {
+    let mut t = [f32::NAN; BATCH];
+    for ((t, &u), f) in t.iter_mut().zip(table).zip(frames) {
+        if f.flags & (flags::SATURATED | flags::MISSING) == 0 {
+            *t = u;
+        }
+    }
+    let n = frames.len().min(table.len()).min(BATCH);
+    if let Some((b, intervals)) = bt.note_table_start(t.get(..n).unwrap_or(&[])) {
+        est.remove_input_offset(b, intervals);
     }
 }

@@ -14,7 +14,8 @@
 //!   Table 1 specimen). The mean over the slip starts is used until the estimator's own μ̂ is
 //!   first adopted.
 //! * **Predict mode** reads the model's own ü1: its stuck phases carry the table's offset as
-//!   the table input does, and the coefficient of a slip start into direction s is μs + s·b_t/g,
+//!   the table input does (unless the table's start against the plan found it:
+//!   [`BaseTuning::note_table_start`]), and the coefficient of a slip start into direction s is μs + s·b_t/g,
 //!   what the model's slides need to carry the same offset: the level a one-way estimate
 //!   gives ([`SlidingEstimate::one_way`](ssvr_core::sliding_id::SlidingEstimate::one_way)).
 //!   Each direction takes its latest slip start's until that direction has an estimate from

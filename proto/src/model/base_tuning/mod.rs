@@ -52,7 +52,9 @@ mod top;
 
 pub use slot::BaseSlot;
 use top::OpenStart;
-pub use top::{open_start_samples, MAX_TABLE_START_OFFSET, MIN_OPEN_START, OPEN_START_RAD};
+pub use top::{
+    open_start_samples, MAX_TABLE_START_OFFSET, MIN_OPEN_START, OPEN_START_RAD, PLAN_LAG_SAMPLES,
+};
 
 /// Most blocks that wait for late events before they are used: as many as cover the detector's
 /// longest reporting delay (the plan's `max_age`) and [`GUARD`], plus one, up to this many (at
@@ -118,8 +120,9 @@ pub struct BaseTuning {
     r: f32,
     g: f32,
     /// The friction coefficient of each direction of the friction force (s = +1, −1) in use:
-    /// μ, or until the base has slid both ways without a rest, that direction's one-way
-    /// estimate (the offset in it), with its standard deviation (0: the prior's;
+    /// μ, or until the base has slid both ways without a rest (and without the table's offset
+    /// from its start), that direction's one-way estimate (the offset in it), with its standard
+    /// deviation (0: the prior's;
     /// `FROM_BREAKAWAY`: a slip start's breakaway, [`Self::slip_start`]).
     mu_dir: [f32; 2],
     mu_use: f32,
@@ -174,8 +177,10 @@ pub struct BaseTuning {
     /// What is removed from the base's blocks before the sliding identification: predict
     /// mode's table offset from the table's start (its fits' offsets are then what is left).
     id_shift: f32,
-    /// The plan's table acceleration at the input's start ([`Self::with_planned_start`]).
+    /// The plan's table acceleration at the input's start and its rise per sample
+    /// ([`Self::with_planned_start`]).
     planned_start: f32,
+    planned_rise: f32,
     /// The prior's μ/μs: a slip start's breakaway coefficient times it is the slide's μ
     /// ([`Self::slip_start`]).
     mu_per_mu_s: f32,
@@ -253,6 +258,7 @@ impl BaseTuning {
             offset_known: zeroed,
             id_shift: 0.0,
             planned_start: f32::NAN,
+            planned_rise: 0.0,
             fuse,
             top_fit: PagedNormal::new(FORGETTING_PER_ROW),
             top_offset: 0.0,
@@ -273,15 +279,18 @@ impl BaseTuning {
         })
     }
 
-    /// Predict mode: the planned table acceleration at the input's start,
-    /// [`Plan::planned_start_m_s2`](crate::Plan::planned_start_m_s2) (`None`: not planned). The
-    /// table's start ([`Self::note_table_start`]) needs it: without a plan a start that is not
-    /// at rest cannot be told from an offset (El Centro's record starts at 0.06 m/s²), and
-    /// there is none.
-    pub fn with_planned_start(mut self, accel: Option<f32>) -> Self {
-        self.planned_start = accel.unwrap_or(f32::NAN);
+    /// Predict mode: the planned table acceleration's line at the input's start,
+    /// [`Plan::planned_start`](crate::Plan::planned_start) (`None`: not planned). The table's
+    /// start ([`Self::note_table_start`]) needs it: without a plan a start that is not at rest
+    /// cannot be told from an offset (El Centro's record starts at 0.06 m/s²), and there is
+    /// none.
+    pub fn with_planned_start(mut self, planned: Option<crate::PlannedStart>) -> Self {
+        (self.planned_start, self.planned_rise) = match planned {
+            Some(p) => (p.accel_m_s2, p.rise_per_sample_m_s2),
+            None => (f32::NAN, 0.0),
+        };
         if !self.fuse {
-            if self.planned_start.is_finite() {
+            if self.planned_start.is_finite() && self.planned_rise.is_finite() {
                 self.start.arm();
             } else {
                 self.start.off();
@@ -323,7 +332,8 @@ impl BaseTuning {
     /// The friction coefficient in use for phase `level`: μ, or while only one direction has
     /// slid without a rest, that direction's one-way estimate (the table offset in it: what the
     /// model's stuck phases carry too, so the top's prediction is off by that offset alone
-    /// instead of by the prior's error in μ).
+    /// instead of by the prior's error in μ; once the table's start against the plan found the
+    /// offset, a one-way fit gives μ itself, for both directions).
     #[inline(always)]
     pub fn mu_for(&self, level: i8) -> f32 {
         match level {

@@ -53,7 +53,7 @@ impl BaseSlot for Option<BaseTuning> {
         )
         .map(|b| {
             b.with_static_friction(plan.specimen.static_friction_coefficient)
-                .with_planned_start(plan.planned_start_m_s2)
+                .with_planned_start(plan.planned_start)
         })
     }
     #[inline(always)]

@@ -1,6 +1,8 @@
 //! Fuse mode: the top accelerometer's offset and gain relative to the base's, from the momentum
 //! balance's fit over the sliding blocks (the module's last paragraph), and before it, the top
-//! offset from the run's first samples ([`OpenStart`]).
+//! offset from the run's first samples ([`OpenStart`]). Predict mode without a rest: the table
+//! accelerometer's offset from the same first samples against the planned input
+//! ([`BaseTuning::note_table_start`]).
 
 use super::{BaseTuning, MAX_GAIN_ERROR};
 use ssvr_core::oscillator_id::GainEstimate;
@@ -49,7 +51,9 @@ pub const LEVEL_SIGMAS: f64 = 5.0;
 /// (n = 22 at 7 Hz and 10 kHz). The model's error in f or ξ is a fraction (p·t)² of the top's
 /// small response then, and the table's offset is left to the stuck-phase observer as before.
 /// A start that is not at rest shows a trend in the residual and gives no offset
-/// ([`LEVEL_SIGMAS`]).
+/// ([`LEVEL_SIGMAS`]). Predict mode without a rest runs the same start on the measured table
+/// acceleration, whose line's intercept less the planned input's is the table's offset
+/// ([`BaseTuning::note_table_start`]).
 #[derive(Debug, Clone)]
 pub(super) struct OpenStart {
     /// Samples of the start still to come (0: none, or done), and the index of its second
@@ -110,6 +114,11 @@ impl OpenStart {
     /// The start to come, of its length (none if it had none).
     pub(super) fn arm(&mut self) {
         self.left = self.len;
+    }
+
+    /// The start's length (samples).
+    pub(super) fn len(&self) -> u32 {
+        self.len
     }
 
     /// Samples of the start still to come.
@@ -200,10 +209,12 @@ impl OpenStart {
     /// deviation, the intercept at the input's first sample of the least-squares line through
     /// the measured table acceleration less the `planned` one's (the same line through the
     /// planned input: a record's first acceleration, and the line's miss of a sine's start,
-    /// cancel), taken when 3σ from 0 and at most [`MAX_TABLE_START_OFFSET`] (not a NaN
-    /// `planned`). A missing sample leaves the measured line through the others: the planned
-    /// input's curvature over 0.1 rad then moves it by far less than the noise.
-    fn line_offset(&self, planned: f64) -> Option<(f64, f64)> {
+    /// cancel). Its σ is the noise's, with in quadrature what a lag of [`PLAN_LAG_SAMPLES`]
+    /// between the plan and the table moves the intercept by (the planned `rise` per sample
+    /// times it); taken when 3σ from 0 and at most [`MAX_TABLE_START_OFFSET`]. A missing
+    /// sample leaves the measured line through the others: the planned input's curvature over
+    /// 0.1 rad then moves it by far less than the noise.
+    fn line_offset(&self, planned: f64, rise: f64) -> Option<(f64, f64)> {
         let n = self.n as f64;
         let (sk, skk) = (self.sum_k as f64, self.sum_k2 as f64);
         let det = n * skk - sk * sk;
@@ -211,7 +222,10 @@ impl OpenStart {
             return None;
         }
         let b = (skk * self.sum as f64 - sk * self.sum_kr as f64) / det - planned;
-        let sd = self.noise(true)? * libm::sqrt(skk / det);
+        let sd = libm::hypot(
+            self.noise(true)? * libm::sqrt(skk / det),
+            rise * PLAN_LAG_SAMPLES,
+        );
         (sd > 0.0 && libm::fabs(b) > 3.0 * sd && libm::fabs(b) <= MAX_TABLE_START_OFFSET)
             .then_some((b, sd))
     }
@@ -229,6 +243,14 @@ pub fn open_start_samples(params: &StructureParams, rate: f64) -> u32 {
         0
     }
 }
+
+/// The lag between the planned input and the table that predict mode's table start allows for
+/// (samples): the table is taken to follow its plan within a sample. A lag τ moves the measured
+/// line's intercept by the planned rise over τ (on the default scene's sine, 8.8e-3 m/s² per
+/// sample at 10 kHz, 4.4 times the noise's σ): one sample's worth is in the start's σ, so such a
+/// lag is not taken for an offset, and offsets of 0.03 m/s² and more are found. A servo table's
+/// lag of milliseconds would need the plan to be the table's expected response.
+pub const PLAN_LAG_SAMPLES: f64 = 1.0;
 
 /// Largest table offset predict mode's table start takes (m/s²): 0.1 g, twice the largest a lab
 /// accelerometer is expected to show (a table that does not follow the plan at its start is
@@ -279,22 +301,27 @@ impl BaseTuning {
     }
 
     /// Predict mode without a rest: the run's first [`Self::open_start`] samples of the table
-    /// acceleration `table` (the model's input, before any offset is removed). At the start's
-    /// end, a table offset found is taken as the offset in use, known from then on: it is
-    /// removed from the base's samples before the sliding identification, whose fits from one
-    /// direction of sliding then give μ itself instead of μ and the offset as one constant
-    /// (`offset_known`), and later estimates from both directions replace it like any other.
+    /// acceleration `table` (the model's input, before any offset is removed; NaN: a missing or
+    /// flagged sample). At the start's end, a table offset found is taken as the offset in use,
+    /// known from then on: it is removed from the base's samples before the sliding
+    /// identification, whose fits from one direction of sliding then give μ itself instead of μ
+    /// and the offset as one constant (`offset_known`), and later estimates from both
+    /// directions replace it like any other. Returns the offset taken and the intervals the
+    /// model has integrated it over (the start's samples less one), for
+    /// [`StickSlipEstimator::remove_input_offset`](ssvr_core::stick_slip::StickSlipEstimator::remove_input_offset).
     #[inline(never)]
-    pub fn note_table_start(&mut self, table: &[f32]) {
+    pub fn note_table_start(&mut self, table: &[f32]) -> Option<(f32, u32)> {
         if !self.start.note(table, None) {
-            return;
+            return None;
         }
-        if let Some((b, sd)) = self.start.line_offset(self.planned_start as f64) {
-            self.offset = b as f32;
-            self.id_shift = self.offset;
-            self.offset_std_use = sd;
-            self.offset_known = true;
-        }
+        let (b, sd) = self
+            .start
+            .line_offset(self.planned_start as f64, self.planned_rise as f64)?;
+        self.offset = b as f32;
+        self.id_shift = self.offset;
+        self.offset_std_use = sd;
+        self.offset_known = true;
+        Some((self.offset, self.start.len().saturating_sub(1)))
     }
 
     /// Fuse mode: the top accelerometer's offset and gain (relative to the base's) from the
@@ -397,7 +424,10 @@ mod tests {
         let planned = |zeroed, rate| {
             BaseTuning::new(params(), rate, zeroed, false, 37)
                 .unwrap()
-                .with_planned_start(Some(0.0))
+                .with_planned_start(Some(crate::PlannedStart {
+                    accel_m_s2: 0.0,
+                    rise_per_sample_m_s2: 0.0,
+                }))
                 .open_start()
         };
         assert_eq!(planned(false, 10_000.0), 22);
@@ -455,34 +485,44 @@ mod tests {
 
     /// Predict mode's table start (no rest, a planned start): the measured table's line less
     /// the plan's, in runs of any length (a missing sample skipped). An offset of ±0.05 m/s²
-    /// under 5e-3 m/s² of noise on a planned ramp from 0.06 m/s² comes out within 2σ (σ of the
-    /// intercept from 22 samples: 0.41 × the noise) and is taken with that σ, the fits from one
-    /// direction of sliding then told it is known; none without one (3σ), beyond 0.1 g, or
-    /// without a plan (no start).
+    /// under 5e-3 m/s² of noise on a gentle planned ramp from 0.06 m/s² comes out within 2σ (σ
+    /// of the intercept from 22 samples: 0.41 × the noise) and is taken with that σ, the fits
+    /// from one direction of sliding then told it is known; none without one (3σ), beyond
+    /// 0.1 g, or without a plan (no start). On a steep ramp (the default scene's sine: 8.8e-3
+    /// m/s² per sample) a lag of a sample is in σ: 0.02 m/s² is not taken, 0.05 m/s² is.
     #[test]
     fn the_table_start_gives_the_table_offset() {
-        let planned = |k: usize| 0.06 + 8e-3 * k as f32;
-        for offset in [0.05f32, -0.05, 0.0, 1.2] {
+        let start = |rise: f32, offset: f32| {
             let mut b = BaseTuning::new(params(), 10_000.0, false, false, 37)
                 .unwrap()
-                .with_planned_start(Some(0.06));
+                .with_planned_start(Some(crate::PlannedStart {
+                    accel_m_s2: 0.06,
+                    rise_per_sample_m_s2: rise,
+                }));
             let n = b.open_start();
             assert_eq!(n, 22);
             let mut table: [f32; 40] =
-                core::array::from_fn(|k| planned(k) + offset + noise(k as u32, 5e-3));
+                core::array::from_fn(|k| 0.06 + rise * k as f32 + offset + noise(k as u32, 5e-3));
             table[5] = f32::NAN;
             // Samples after the start: never read.
             table[n..].iter_mut().for_each(|m| *m = 1e3);
-            let mut at = 0;
+            let (mut at, mut taken) = (0, None);
             for len in [3usize, 16, 21] {
                 let to = (at + len).min(40);
-                b.note_table_start(&table[at..to]);
+                let t = b.note_table_start(&table[at..to]);
+                assert!(t.is_none() || to >= n, "taken before the start's end");
+                taken = taken.or(t);
                 at = to;
             }
             assert_eq!(b.open_start(), 0);
+            (b, taken)
+        };
+        for offset in [0.05f32, -0.05, 0.0, 1.2] {
+            let (b, taken) = start(1e-4, offset);
             let (found, sd) = (b.offset(), b.offset_std_use);
             if offset == 0.0 || offset > 1.0 {
                 assert_eq!((found, sd, b.offset_known), (0.0, 0.0, false), "{offset}");
+                assert_eq!(taken, None);
             } else {
                 assert!(sd > 1.5e-3 && sd < 3e-3, "σ {sd}");
                 assert!(
@@ -490,12 +530,22 @@ mod tests {
                     "{found} for {offset}"
                 );
                 assert!(b.offset_known && b.id_shift == found);
+                // (The model integrated it over the start's 21 intervals.)
+                assert_eq!(taken, Some((found, 21)));
             }
         }
+        let (steep, _) = start(8.8e-3, 0.02);
+        assert!(!steep.offset_known, "a lag-sized offset taken");
+        let (steep, _) = start(8.8e-3, 0.05);
+        assert!(steep.offset_known && steep.offset_std_use > 8e-3);
         // No plan, or a rest: no start; fuse mode's start is the top's.
         let none = BaseTuning::new(params(), 10_000.0, false, false, 37).unwrap();
         assert_eq!(none.with_planned_start(None).open_start(), 0);
         let rest = BaseTuning::new(params(), 10_000.0, true, false, 37).unwrap();
-        assert_eq!(rest.with_planned_start(Some(0.0)).open_start(), 0);
+        let flat = crate::PlannedStart {
+            accel_m_s2: 0.0,
+            rise_per_sample_m_s2: 0.0,
+        };
+        assert_eq!(rest.with_planned_start(Some(flat)).open_start(), 0);
     }
 }
