@@ -10,9 +10,10 @@
 //!   the same message) and makes the plan of its specimen and the model `SSVR_MODEL` =
 //!   `fixed-base` | `rectangular` (default) | `stick-slip`, in the mode `SSVR_MODE` = `fuse`
 //!   (default) | `predict`, with the host's own code
-//!   (`ssvr_proto::Plan::new`), and the planned input's start `SSVR_PLANNED_START` (the f32's
-//!   bits in hex or `none`, as `host-sim qemu` passes it; unset: the scene file's own input, if
-//!   it is a whole scene). Writes `OUT_DIR/plan.rs`: the plan's words and digest, the
+//!   (`ssvr_proto::Plan::new`), and the planned input's start `SSVR_PLANNED_START`
+//!   (`accel,rise`, two f32s' bits in hex, or `none`, as `host-sim qemu` passes it; unset or
+//!   empty: the scene file's own input, if it is a whole scene; kept for a predict-mode plan
+//!   without a rest only, `Plan::with_planned_start`). Writes `OUT_DIR/plan.rs`: the plan's words and digest, the
 //!   detector's ring, the stick-slip storage, and the model's and detector's types (only that
 //!   model's code is compiled in).
 //! * Board image: also `OUT_DIR/scene_board.rs`: the integer TIM2 rate, the ADC configuration and
@@ -107,25 +108,18 @@ fn main() {
     // bits in hex, `accel,rise`, or `none`), else the scene file's own input (a whole scene: the
     // default table1.toml; a specimen file, as host-sim writes, has none), else none.
     println!("cargo:rerun-if-env-changed=SSVR_PLANNED_START");
-    match env::var("SSVR_PLANNED_START") {
-        Ok(v) if v.is_empty() => plan = planned_from_scene(plan, &path),
-        Ok(v) if v == "none" => plan.planned_start = None,
-        Ok(v) => {
-            let bits = |s: Option<&str>| {
-                s.and_then(|s| u32::from_str_radix(s, 16).ok())
-                    .map(f32::from_bits)
-                    .unwrap_or_else(|| {
-                        panic!("SSVR_PLANNED_START: {v:?} is not `accel,rise` in hex")
-                    })
-            };
-            let mut it = v.split(',');
-            plan.planned_start = Some(ssvr_proto::PlannedStart {
-                accel_m_s2: bits(it.next()),
-                rise_per_sample_m_s2: bits(it.next()),
+    plan = match env::var("SSVR_PLANNED_START") {
+        Ok(v) if v == "none" => plan.with_planned_start(None),
+        Ok(v) if !v.is_empty() => {
+            let p: ssvr_proto::PlannedStart = v.parse().unwrap_or_else(|_| {
+                panic!(
+                    "SSVR_PLANNED_START: {v:?} is not `accel,rise`, two finite f32s' bits in hex"
+                )
             });
+            plan.with_planned_start(Some(p))
         }
-        Err(_) => plan = planned_from_scene(plan, &path),
-    }
+        _ => planned_from_scene(plan, &path),
+    };
     fs::write(out.join("plan.rs"), plan_consts(&path, &plan)).expect("write OUT_DIR/plan.rs");
     if board {
         fs::write(out.join("scene_board.rs"), board_consts(&path, &specimen))

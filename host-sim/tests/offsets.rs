@@ -18,6 +18,15 @@ fn scene(bias: [f64; 3], start_s: f64, dropout: f64) -> Scene {
     s
 }
 
+/// The first 2 s of El Centro (the base stuck throughout).
+fn elcentro_2s() -> Scene {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let mut s = Scene::load(dir.join("elcentro.toml")).unwrap();
+    s.duration_s = 2.0;
+    s.samples = (s.duration_s * s.rate_hz).round() as u64;
+    s
+}
+
 fn go(s: &Scene, mode: Mode) -> RunOutcome {
     let mut opts = RunOptions::new("test");
     opts.mode = mode;
@@ -158,13 +167,7 @@ fn the_table_gain_is_found_against_the_displacement() {
 /// invented.
 #[test]
 fn the_top_offset_is_found_at_the_open_loop_start() {
-    let elcentro = {
-        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
-        let mut s = Scene::load(dir.join("elcentro.toml")).unwrap();
-        s.duration_s = 2.0;
-        s.samples = (s.duration_s * s.rate_hz).round() as u64;
-        s
-    };
+    let elcentro = elcentro_2s();
     let g = 0.49;
     let cases = [
         (
@@ -238,7 +241,8 @@ fn the_top_gain_is_found_before_the_first_slide() {
 /// response to it over those samples removed from its state
 /// (`StickSlipEstimator::remove_input_offset`). Every accelerometer 0.05 g off (table +,
 /// base −), on the first 2 s of the default scene and of El Centro (stuck throughout).
-/// Measured: the table's offset 2.9e-3 m/s² low at the start (its σ: 0.41 × the noise, 2.1e-3
+/// Measured: the table's offset 2.9e-3 m/s² low at the start (its σ from the noise 0.41 × the
+/// noise, 2.1e-3 m/s²; with a lag of one sample on the default scene's sine, 9.0e-3
 /// m/s²; the default scene's both-ways fit then found it within 2e-4), RMS 0.051 / 0.121 % of
 /// the peak (4.42 / 20.4 % before the table start: the offset drove the stuck model until the
 /// base had slid both ways; 0.228 / 0.471 % with the start's free oscillation left in the
@@ -247,13 +251,7 @@ fn the_top_gain_is_found_before_the_first_slide() {
 /// 32 s went from 0.066 to 0.56 % RMS.
 #[test]
 fn predict_finds_the_table_offset_at_the_input_start() {
-    let elcentro = {
-        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
-        let mut s = Scene::load(dir.join("elcentro.toml")).unwrap();
-        s.duration_s = 2.0;
-        s.samples = (s.duration_s * s.rate_hz).round() as u64;
-        s
-    };
+    let elcentro = elcentro_2s();
     let g = 0.05 * 9.80665;
     for (name, base) in [
         ("default", scene([0.0; 3], 0.0, 0.0)),

@@ -19,6 +19,9 @@ pub const ADC_ERROR: u8 = 1 << 6;
 /// The displacement was unusable (missing, not finite, saturated): a displacement detector
 /// repeated its last value.
 pub const DISP_INVALID: u8 = 1 << 7;
+/// The flags that make a sample's accelerations unusable to the models (their inputs held, the
+/// identification's samples left out): saturated or missing.
+pub const ACCEL_UNUSABLE: u8 = SATURATED | MISSING;
 /// Any of the flags that make a measured channel unusable.
 pub const INVALID: u8 = NOT_FINITE | SATURATED | MISSING | ADC_ERROR | DISP_INVALID;
 /// The flags an acquisition may set on a [`crate::Sample`] (the pipeline adds the others):

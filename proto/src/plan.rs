@@ -131,6 +131,43 @@ pub struct PlannedStart {
     pub rise_per_sample_m_s2: f32,
 }
 
+/// `accel,rise`: the two f32s' bits in hex (`SSVR_PLANNED_START`, how `host-sim qemu` hands a
+/// plan's planned start to the firmware's build; its `FromStr` reads it back).
+impl core::fmt::Display for PlannedStart {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(
+            f,
+            "{:08x},{:08x}",
+            self.accel_m_s2.to_bits(),
+            self.rise_per_sample_m_s2.to_bits()
+        )
+    }
+}
+
+impl core::str::FromStr for PlannedStart {
+    type Err = PlanError;
+
+    /// The [`Display`](core::fmt::Display) form: two f32s' bits in hex, both finite, nothing
+    /// else (`PlanError::Words` otherwise).
+    fn from_str(s: &str) -> Result<Self, PlanError> {
+        let mut parts = s.split(',');
+        let mut next = || {
+            parts
+                .next()
+                .and_then(|p| u32::from_str_radix(p, 16).ok())
+                .map(f32::from_bits)
+                .filter(|x| x.is_finite())
+        };
+        match (next(), next(), parts.next()) {
+            (Some(accel_m_s2), Some(rise_per_sample_m_s2), None) => Ok(Self {
+                accel_m_s2,
+                rise_per_sample_m_s2,
+            }),
+            _ => Err(PlanError::Words),
+        }
+    }
+}
+
 /// The planned table acceleration's line at the input's start for the prior `params` at
 /// `rate` ([`PlannedStart`]): the least-squares line through `accel(k/rate)` over the first
 /// [`open_start_samples`] samples (`None` if there are none or it is not finite in f32).
@@ -145,15 +182,30 @@ pub fn planned_start(
         let (k, y) = (k as f64, accel(k as f64 / rate));
         (s, sk, skk, sy, sky) = (s + 1.0, sk + k, skk + k * k, sy + y, sky + k * y);
     }
-    let det = s * skk - sk * sk;
+    let (a, rise, _) = line([s, sk, skk, sy, sky])?;
+    let p = PlannedStart {
+        accel_m_s2: a as f32,
+        rise_per_sample_m_s2: rise as f32,
+    };
+    (p.accel_m_s2.is_finite() && p.rise_per_sample_m_s2.is_finite()).then_some(p)
+}
+
+/// The least-squares line y = a + r·k through samples given by their sums
+/// `[n, Σk, Σk², Σy, Σk·y]`: (a, r, and a's standard deviation per unit noise of one sample,
+/// √(Σk²/det)); `None` when the sums are degenerate (fewer than two distinct k). The planned
+/// start and predict mode's table start (`BaseTuning::note_table_start`) both use it, so the
+/// measured and the planned lines are the same fit.
+pub fn line(sums: [f64; 5]) -> Option<(f64, f64, f64)> {
+    let [n, sk, skk, sy, sky] = sums;
+    let det = n * skk - sk * sk;
     if det.is_nan() || det <= 0.0 {
         return None;
     }
-    let p = PlannedStart {
-        accel_m_s2: ((skk * sy - sk * sky) / det) as f32,
-        rise_per_sample_m_s2: ((s * sky - sk * sy) / det) as f32,
-    };
-    (p.accel_m_s2.is_finite() && p.rise_per_sample_m_s2.is_finite()).then_some(p)
+    Some((
+        (skk * sy - sk * sky) / det,
+        (n * sky - sk * sy) / det,
+        libm::sqrt(skk / det),
+    ))
 }
 
 /// Version of the word layout ([`Plan::to_words`]).
@@ -229,7 +281,8 @@ impl Plan {
             self.stick_slip.use_identified_mu = false;
             self.stick_slip.observer_bandwidth = 0.0;
         }
-        self
+        let planned = self.planned_start;
+        self.with_planned_start(planned)
     }
 
     /// This plan with a rest of `seconds` before the input (whole samples of it).
@@ -244,15 +297,16 @@ impl Plan {
         } else {
             0
         };
-        self
+        let planned = self.planned_start;
+        self.with_planned_start(planned)
     }
 
     /// This plan with its planned table acceleration `accel(t)` (m/s², t in s from the input's
     /// start): [`Self::planned_start`] ([`planned_start`]) for a predict-mode plan without a
     /// rest, the only one that uses it (none for the others, whose digests and images then do
     /// not depend on the input). Call it after [`Self::with_mode`] and [`Self::with_rest`].
-    pub fn with_planned_input(mut self, accel: impl Fn(f64) -> f64) -> Self {
-        self.planned_start = if self.mode == Mode::Predict && self.rest_samples == 0 {
+    pub fn with_planned_input(self, accel: impl Fn(f64) -> f64) -> Self {
+        let planned = if self.uses_planned_start() {
             planned_start(
                 &self.specimen.structure,
                 self.specimen.sample_rate_hz,
@@ -261,7 +315,23 @@ impl Plan {
         } else {
             None
         };
+        self.with_planned_start(planned)
+    }
+
+    /// This plan with the planned start `planned` (as [`Self::with_planned_input`] computes
+    /// it; the firmware's build gets it so from the host): kept for a predict-mode plan without
+    /// a rest only, and when finite. [`Self::with_mode`] and [`Self::with_rest`] drop it when
+    /// the plan no longer uses it.
+    pub fn with_planned_start(mut self, planned: Option<PlannedStart>) -> Self {
+        let uses = self.uses_planned_start();
+        self.planned_start = planned
+            .filter(|p| uses && p.accel_m_s2.is_finite() && p.rise_per_sample_m_s2.is_finite());
         self
+    }
+
+    /// Whether the plan uses a planned start: predict mode without a rest.
+    fn uses_planned_start(&self) -> bool {
+        self.mode == Mode::Predict && self.rest_samples == 0
     }
 
     /// Whether the pipeline identifies the table accelerometer's gain against the displacement
@@ -583,6 +653,21 @@ mod tests {
         assert!((p.rise_per_sample_m_s2 - 3e-4).abs() < 1e-9, "{p:?}");
         assert_eq!(Plan::from_words(&line.to_words()), Ok(line));
         assert_ne!(line.digest(), plan.digest());
+        // Its text form (`SSVR_PLANNED_START`) round-trips; anything else is an error.
+        let text = std::format!("{p}");
+        assert_eq!(text.parse::<PlannedStart>(), Ok(p));
+        for bad in ["", "3d75c28f", "3d75c28f,39d1b717,0", "7fc00000,0", "x,y"] {
+            assert_eq!(
+                bad.parse::<PlannedStart>(),
+                Err(PlanError::Words),
+                "{bad:?}"
+            );
+        }
+        // A later `with_rest` or `with_mode` drops it; `with_planned_start` keeps the rule.
+        assert_eq!(line.with_rest(0.5).planned_start, None);
+        assert_eq!(line.with_mode(Mode::Fuse).planned_start, None);
+        let fuse = Plan::new(specimen(10_000.0), ModelKind::StickSlip).unwrap();
+        assert_eq!(fuse.with_planned_start(Some(p)).planned_start, None);
         // 2 m/s² at 7 Hz from rest: the start is 22 samples (0.1 rad of p), ω·T = 0.097.
         let w = 2.0 * core::f64::consts::PI * 7.0;
         let sine = plan.with_planned_input(|t| 2.0 * libm::sin(w * t));

@@ -327,7 +327,9 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
 
     /// Keep the wide sliding observer (`hold`: the natural frequency and damping ratio in use
     /// are a prior not yet confirmed by their identification) even once μ̂ is adopted: it
-    /// narrows at the first adoption of μ̂ after the release (the next slide's start). With f
+    /// narrows at the first adoption of μ̂ after the release (the next identification block
+    /// that adopts it, mid-slide or at a slide's start). Holding does not widen an observer
+    /// already narrow (a large [`Self::retune`] does). With f
     /// and ξ wrong, the narrow observer lets their error grow while sliding: on the robustness
     /// scorecard's combined row (f told 8 % high, ξ ×2, the first slide at 48 ms) μ̂ adopted
     /// mid-slide took the max error from 1.7 % to 2.2 % of the peak.

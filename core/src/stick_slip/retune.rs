@@ -106,8 +106,11 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
     /// table input found after the model has integrated it (predict mode's table start: 22
     /// samples of a 0.49 m/s² offset left a free oscillation of ~0.05 m/s² in the stuck model,
     /// which has no observer in predict mode). The open stuck map is affine in its input, so
-    /// the response is z ← z + A·z + (b0 + b1)·b from z = 0, composed in f64; the last sample's
-    /// stored input loses `b` too, the next interval's start. Only while stuck
+    /// the response is z ← z + A·z + (b0 + b1)·b from z = 0, in `T` as the model's own steps
+    /// (`intervals` steps once: ~10 M4F instructions each in f32; in f64, soft-float on the
+    /// M4F, ~50 times that); the last sample's stored input loses `b` too, the next interval's
+    /// start. It assumes the last `intervals` intervals were stuck and open loop (no stuck
+    /// observer: predict mode). Only while stuck
     /// (a slide since changed the map: nothing is done); a late event's re-simulation from an
     /// earlier sample does not see it, as [`Self::shift_top`].
     pub fn remove_input_offset(&mut self, b: T, intervals: u32) {
@@ -115,16 +118,14 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
             return;
         }
         let m = &self.open;
-        let (a, b0, b1) = (m.a.map(T::to_f64), m.b0.map(T::to_f64), m.b1.map(T::to_f64));
-        let (f0, f1) = ((b0[0] + b1[0]) * b.to_f64(), (b0[1] + b1[1]) * b.to_f64());
-        let mut z = [0.0f64; 2];
+        let (a, f0, f1) = (m.a, (m.b0[0] + m.b1[0]) * b, (m.b0[1] + m.b1[1]) * b);
+        let mut dz = [T::ZERO; 2];
         for _ in 0..intervals {
-            z = [
-                z[0] + (a[0] * z[0] + a[1] * z[1] + f0),
-                z[1] + (a[2] * z[0] + a[3] * z[1] + f1),
+            dz = [
+                dz[0] + (a[0] * dz[0] + a[1] * dz[1] + f0),
+                dz[1] + (a[2] * dz[0] + a[3] * dz[1] + f1),
             ];
         }
-        let dz = z.map(T::from_f64);
         // (The last sample's input too: the next interval starts from it.)
         self.adjust_last(|s| {
             s.z[0] -= dz[0];

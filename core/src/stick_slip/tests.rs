@@ -865,8 +865,8 @@ fn a_retune_mid_slide_keeps_the_friction_episode() {
 }
 
 /// `hold_wide`: μ̂ adopted, the held estimator keeps the wide sliding observer while the other
-/// narrows at the adoption; released, it narrows at the next adoption of μ̂ (the next slide's
-/// start), and both then run the same sliding map. The measured top is the truth model's
+/// narrows at the adoption; released, it narrows at the next adoption of μ̂ (the next
+/// identification block: measured at sample 5 022, released at 5 000), and stays so. The measured top is the truth model's
 /// (μ = 0.2), sliding back and forth; both estimators start from μ = 0.25.
 #[test]
 fn a_held_sliding_observer_stays_wide_until_released() {
@@ -890,7 +890,7 @@ fn a_held_sliding_observer_stays_wide_until_released() {
     held.hold_wide(true);
     let wide = free.slides[0].0;
     assert_ne!(wide, free.slides[1].0, "the two observers differ");
-    let mut released_at = None;
+    let (mut released_at, mut narrowed_at) = (None, None);
     for k in 0..12_000u64 {
         if k % 700 == 0 {
             let s = if (k / 700) % 2 == 0 { 1 } else { -1 };
@@ -915,13 +915,19 @@ fn a_held_sliding_observer_stays_wide_until_released() {
                 held.hold_wide(false);
                 released_at = Some(k);
             }
-        } else if k >= 5_600 {
-            // (The slide started at 5 600 adopts μ̂ again: narrow from there.)
-            assert_eq!(held.slide_gain, narrow, "k {k}");
+        } else if held.slide_gain == narrow {
+            narrowed_at = narrowed_at.or(Some(k));
+        } else {
+            assert!(narrowed_at.is_none(), "k {k}: wide again");
         }
     }
     assert!(free.mu_adopted());
     assert_eq!(released_at, Some(5_000));
+    // Narrow at the first identification block after the release that adopts μ̂ (mid-slide:
+    // the slide from 4 900 on), and for good.
+    let at = narrowed_at.unwrap();
+    std::println!("narrowed at {at}");
+    assert!(at > 5_000 && at <= 5_600, "{at}");
 }
 
 /// `remove_input_offset`: a stuck model fed its table input with an offset b for its first n
@@ -959,7 +965,7 @@ fn an_input_offset_is_removed_from_the_state() {
     }
     std::println!("after the start: {worst_fixed:.2e} corrected, {worst_left:.3} not");
     assert!(worst_fixed < 1e-12, "{worst_fixed}");
-    assert!(worst_left > 0.03 && worst_left < 0.07, "{worst_left}");
+    assert!(worst_left > 0.040 && worst_left < 0.047, "{worst_left}");
     // Sliding: nothing done.
     let mut sliding = mk();
     sliding.push_event(1, 0.0).unwrap();

@@ -127,14 +127,7 @@ pub fn cargo_build(
         None => cmd.env_remove("SSVR_MODE"),
     };
     match planned {
-        Some(Some(p)) => cmd.env(
-            "SSVR_PLANNED_START",
-            format!(
-                "{:08x},{:08x}",
-                p.accel_m_s2.to_bits(),
-                p.rise_per_sample_m_s2.to_bits()
-            ),
-        ),
+        Some(Some(p)) => cmd.env("SSVR_PLANNED_START", p.to_string()),
         Some(None) => cmd.env("SSVR_PLANNED_START", "none"),
         None => cmd.env_remove("SSVR_PLANNED_START"),
     };

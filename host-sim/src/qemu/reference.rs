@@ -189,6 +189,7 @@ impl Reference {
         if let Reference::StickSlip {
             est,
             tuning: Some(_),
+            base_tuning: Some(_),
             ..
         } = &mut r
         {
@@ -278,7 +279,7 @@ impl Reference {
                     }
                     *last = (phase, last.1.max(t));
                 }
-                let valid = f.flags & (flags::SATURATED | flags::MISSING) == 0;
+                let valid = f.flags & flags::ACCEL_UNUSABLE == 0;
                 let top = if valid && !*predict {
                     f64::from(channels[ssvr_proto::Channel::TopAccel.index()])
                 } else {
@@ -355,7 +356,7 @@ impl Reference {
                 }
                 if let Some(fr) = friction {
                     let sliding = est.phase() != SlidingPhase::Stuck;
-                    let base = if f.flags & (flags::SATURATED | flags::MISSING) == 0 {
+                    let base = if f.flags & flags::ACCEL_UNUSABLE == 0 {
                         channels[ssvr_proto::Channel::BaseAccel.index()]
                     } else {
                         f32::NAN

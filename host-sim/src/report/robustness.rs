@@ -361,9 +361,17 @@ pub fn markdown(rows: &[Row]) -> String {
             .iter()
             .filter(|r| !r.in_goal_range && r.goal_met)
             .count();
+        let mut ids: Vec<&str> = rows
+            .iter()
+            .filter(|r| !r.in_goal_range)
+            .map(|r| r.perturbation)
+            .collect();
+        ids.sort_unstable();
+        ids.dedup();
         let _ = writeln!(
             s,
-            "{beyond} more rows are beyond the goals' range (a top gain of +2 %; the goals are for ±1 %), shown, not counted: {met_beyond} of them would meet it.",
+            "{beyond} more rows are beyond the goals' range ({}; the goals are for a prior off by up to f ±8 %, ξ ×2 or ×0.5, μ ±25 %, m1 ±5 %, offsets up to 0.05 g, gains ±1 %, 1 % dropped frames), shown, not counted: {met_beyond} of them would meet it.",
+            ids.join(", ")
         );
     }
     s

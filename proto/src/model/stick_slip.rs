@@ -71,7 +71,7 @@ pub struct StickSlipModel<
 /// when the sample is saturated or missing, or in predict mode: `fuse` false).
 #[inline(always)]
 fn inputs(channels: &[f32; CHANNELS], f: u8, fuse: bool) -> (f32, f32) {
-    let top = if fuse && f & (flags::SATURATED | flags::MISSING) == 0 {
+    let top = if fuse && f & flags::ACCEL_UNUSABLE == 0 {
         channels[Channel::TopAccel.index()]
     } else {
         f32::NAN
@@ -153,13 +153,14 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot> FromPlan
                 .map(|t| t.after_rest(plan.rest_samples)),
             Mode::Predict => None,
         };
-        let mut est = est;
-        // (Fuse mode, Coulomb friction: the wide sliding observer until f and ξ are known.)
-        est.hold_wide(tuning.is_some() && !law);
         let mut m = Self::new(est, plan.max_age as f32).with_tuning(tuning);
         m.fuse = plan.mode == Mode::Fuse;
         m.friction = F::of_plan(plan);
         m.base_tuning = B::of_plan(plan);
+        // (Fuse mode, Coulomb friction, with the base tuning whose runs release it: the wide
+        // sliding observer until f and ξ are known.)
+        let hold = m.tuning.is_some() && m.base_tuning.get().is_some() && !law;
+        m.est.hold_wide(hold);
         Ok(m)
     }
 }
@@ -257,7 +258,7 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot> Model
             if self.est.phase() == SlidingPhase::Stuck {
                 // A run is in one phase (events start runs): stuck throughout, in blocks.
                 for ((f, &b), &u) in frames.iter().zip(base).zip(table) {
-                    let ok = f.flags & (flags::SATURATED | flags::MISSING) == 0;
+                    let ok = f.flags & flags::ACCEL_UNUSABLE == 0;
                     fr.stuck_sample(if ok { b } else { f32::NAN }, u);
                 }
                 let mut out = [0.0f32; BATCH];
@@ -271,7 +272,7 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot> Model
             } else {
                 for (((f, &u), &y), &b) in frames.iter_mut().zip(table).zip(top).zip(base) {
                     // A saturated or missing base sample holds the slip acceleration.
-                    let b = if f.flags & (flags::SATURATED | flags::MISSING) == 0 {
+                    let b = if f.flags & flags::ACCEL_UNUSABLE == 0 {
                         b
                     } else {
                         f32::NAN
@@ -400,7 +401,7 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
             .zip(base.iter().zip(table))
             .zip(measured)
         {
-            *g = if f.flags & (flags::SATURATED | flags::MISSING) == 0 {
+            *g = if f.flags & flags::ACCEL_UNUSABLE == 0 {
                 b
             } else {
                 f32::NAN
@@ -492,7 +493,7 @@ fn table_start<const H: usize>(
 ) {
     let mut t = [f32::NAN; BATCH];
     for ((t, &u), f) in t.iter_mut().zip(table).zip(frames) {
-        if f.flags & (flags::SATURATED | flags::MISSING) == 0 {
+        if f.flags & flags::ACCEL_UNUSABLE == 0 {
             *t = u;
         }
     }

@@ -215,17 +215,18 @@ impl OpenStart {
     /// sample leaves the measured line through the others: the planned input's curvature over
     /// 0.1 rad then moves it by far less than the noise.
     fn line_offset(&self, planned: f64, rise: f64) -> Option<(f64, f64)> {
-        let n = self.n as f64;
-        let (sk, skk) = (self.sum_k as f64, self.sum_k2 as f64);
-        let det = n * skk - sk * sk;
-        if self.n < MIN_OPEN_START || det.is_nan() || det <= 0.0 {
+        if self.n < MIN_OPEN_START {
             return None;
         }
-        let b = (skk * self.sum as f64 - sk * self.sum_kr as f64) / det - planned;
-        let sd = libm::hypot(
-            self.noise(true)? * libm::sqrt(skk / det),
-            rise * PLAN_LAG_SAMPLES,
-        );
+        let (a, _, per_noise) = crate::plan::line([
+            self.n as f64,
+            self.sum_k as f64,
+            self.sum_k2 as f64,
+            self.sum as f64,
+            self.sum_kr as f64,
+        ])?;
+        let b = a - planned;
+        let sd = libm::hypot(self.noise(true)? * per_noise, rise * PLAN_LAG_SAMPLES);
         (sd > 0.0 && libm::fabs(b) > 3.0 * sd && libm::fabs(b) <= MAX_TABLE_START_OFFSET)
             .then_some((b, sd))
     }
@@ -247,7 +248,8 @@ pub fn open_start_samples(params: &StructureParams, rate: f64) -> u32 {
 /// The lag between the planned input and the table that predict mode's table start allows for
 /// (samples): the table is taken to follow its plan within a sample. A lag τ moves the measured
 /// line's intercept by the planned rise over τ (on the default scene's sine, 8.8e-3 m/s² per
-/// sample at 10 kHz, 4.4 times the noise's σ): one sample's worth is in the start's σ, so such a
+/// sample at 10 kHz, 4.3 times the intercept's σ from the noise, 2.1e-3 m/s² at 5e-3 m/s²):
+/// one sample's worth is in the start's σ, so such a
 /// lag is not taken for an offset, and offsets of 0.03 m/s² and more are found. A servo table's
 /// lag of milliseconds would need the plan to be the table's expected response.
 pub const PLAN_LAG_SAMPLES: f64 = 1.0;
@@ -409,7 +411,7 @@ mod tests {
     /// 10 samples); only fuse mode without a rest has one, and predict mode's with a planned
     /// start.
     #[test]
-    fn the_open_start_is_fuse_mode_without_a_rest() {
+    fn the_open_starts_lengths() {
         let b = |zeroed, fuse, rate| {
             BaseTuning::new(params(), rate, zeroed, fuse, 37)
                 .unwrap()
