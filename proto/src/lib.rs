@@ -36,6 +36,7 @@ pub mod log;
 pub mod model;
 pub mod pipeline;
 pub mod plan;
+pub mod planned_start;
 pub mod stream;
 pub mod table_gain;
 pub mod zeroing;

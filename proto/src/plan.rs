@@ -6,7 +6,8 @@
 //! by a digest ([`Plan::digest`]) the firmware reports so the host can check the image runs
 //! the plan it expects.
 
-use crate::model::{open_start_samples, Mode, ModelKind};
+use crate::model::{Mode, ModelKind};
+pub use crate::planned_start::{line, planned_start, PlannedStart};
 use ssvr_core::detect::acceleration::PhaseDetectorConfig;
 use ssvr_core::detect::displacement::DetectorConfig;
 use ssvr_core::recursion::Estimator32;
@@ -118,94 +119,6 @@ pub struct Plan {
     /// mode without a rest takes the table accelerometer's offset as the measured line's
     /// intercept less its. `None`: not planned (a replay), or not used (fuse mode, a rest).
     pub planned_start: Option<PlannedStart>,
-}
-
-/// The least-squares line through the planned table acceleration over the open-loop start's
-/// samples ([`open_start_samples`]), from the input's first sample ([`planned_start`]).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PlannedStart {
-    /// Its value at the input's first sample (m/s²).
-    pub accel_m_s2: f32,
-    /// Its rise per sample (m/s²): what a lag of one sample between the plan and the table
-    /// moves the measured intercept by.
-    pub rise_per_sample_m_s2: f32,
-}
-
-/// `accel,rise`: the two f32s' bits in hex (`SSVR_PLANNED_START`, how `host-sim qemu` hands a
-/// plan's planned start to the firmware's build; its `FromStr` reads it back).
-impl core::fmt::Display for PlannedStart {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        write!(
-            f,
-            "{:08x},{:08x}",
-            self.accel_m_s2.to_bits(),
-            self.rise_per_sample_m_s2.to_bits()
-        )
-    }
-}
-
-impl core::str::FromStr for PlannedStart {
-    type Err = PlanError;
-
-    /// The [`Display`](core::fmt::Display) form: two f32s' bits in hex, both finite, nothing
-    /// else (`PlanError::Words` otherwise).
-    fn from_str(s: &str) -> Result<Self, PlanError> {
-        let mut parts = s.split(',');
-        let mut next = || {
-            parts
-                .next()
-                .and_then(|p| u32::from_str_radix(p, 16).ok())
-                .map(f32::from_bits)
-                .filter(|x| x.is_finite())
-        };
-        match (next(), next(), parts.next()) {
-            (Some(accel_m_s2), Some(rise_per_sample_m_s2), None) => Ok(Self {
-                accel_m_s2,
-                rise_per_sample_m_s2,
-            }),
-            _ => Err(PlanError::Words),
-        }
-    }
-}
-
-/// The planned table acceleration's line at the input's start for the prior `params` at
-/// `rate` ([`PlannedStart`]): the least-squares line through `accel(k/rate)` over the first
-/// [`open_start_samples`] samples (`None` if there are none or it is not finite in f32).
-pub fn planned_start(
-    params: &StructureParams,
-    rate: f64,
-    accel: impl Fn(f64) -> f64,
-) -> Option<PlannedStart> {
-    let n = open_start_samples(params, rate);
-    let (mut s, mut sk, mut skk, mut sy, mut sky) = (0.0, 0.0, 0.0, 0.0, 0.0);
-    for k in 0..n {
-        let (k, y) = (k as f64, accel(k as f64 / rate));
-        (s, sk, skk, sy, sky) = (s + 1.0, sk + k, skk + k * k, sy + y, sky + k * y);
-    }
-    let (a, rise, _) = line([s, sk, skk, sy, sky])?;
-    let p = PlannedStart {
-        accel_m_s2: a as f32,
-        rise_per_sample_m_s2: rise as f32,
-    };
-    (p.accel_m_s2.is_finite() && p.rise_per_sample_m_s2.is_finite()).then_some(p)
-}
-
-/// The least-squares line y = a + r·k through samples given by their sums
-/// `[n, Σk, Σk², Σy, Σk·y]`: (a, r, and a's standard deviation per unit noise of one sample,
-/// √(Σk²/det)); `None` when the sums are degenerate (fewer than two distinct k). The planned
-/// start and predict mode's table start (`BaseTuning::note_table_start`) both use it, so the
-/// measured and the planned lines are the same fit.
-pub fn line(sums: [f64; 5]) -> Option<(f64, f64, f64)> {
-    let [n, sk, skk, sy, sky] = sums;
-    let det = n * skk - sk * sk;
-    if det.is_nan() || det <= 0.0 {
-        return None;
-    }
-    Some((
-        (skk * sy - sk * sky) / det,
-        (n * sky - sk * sy) / det,
-        libm::sqrt(skk / det),
-    ))
 }
 
 /// Version of the word layout ([`Plan::to_words`]).
@@ -623,6 +536,7 @@ impl Reader<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::open_start_samples;
 
     fn specimen(rate: f64) -> Specimen {
         Specimen {

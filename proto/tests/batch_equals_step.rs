@@ -241,21 +241,28 @@ fn zeroed_offsets_batches_equal_single_steps() {
     );
 }
 
-/// Fuse mode without a rest, starting at rest: the top offset is taken at the end of the
-/// open-loop start (`OpenStart`), at the same sample whatever the batching (a batch is split
-/// there; before, a batch of 16 took it up to 15 samples later than single steps did).
-#[test]
-fn an_open_start_batches_equal_single_steps() {
-    let bias = [0.0, 0.0, 0.2];
-    let one = compare_with::<StickSlipModel<H>, AccelerationDetector<64>>(
+/// The stick-slip model's offsets (table, base, top) after a run without a rest that starts at
+/// rest ([`sample_from_rest`]) with accelerometer offsets `bias`, in `mode`; [`compare_with`]
+/// checks batches against single steps.
+fn offsets_after_a_start(bias: [f32; 3], mode: Mode) -> [f32; 3] {
+    compare_with::<StickSlipModel<H>, AccelerationDetector<64>>(
         ModelKind::StickSlip,
         EventSource::Detector,
         0.0,
         bias,
         true,
-        Mode::Fuse,
-    );
-    let top = one.model().offsets()[2];
+        mode,
+    )
+    .model()
+    .offsets()
+}
+
+/// Fuse mode without a rest, starting at rest: the top offset is taken at the end of the
+/// open-loop start (`OpenStart`), at the same sample whatever the batching (a batch is split
+/// there; before, a batch of 16 took it up to 15 samples later than single steps did).
+#[test]
+fn an_open_start_batches_equal_single_steps() {
+    let top = offsets_after_a_start([0.0, 0.0, 0.2], Mode::Fuse)[2];
     assert!((top - 0.2).abs() < 5e-3, "top offset {top}");
 }
 
@@ -375,15 +382,6 @@ fn two_slip_starts_in_a_batch_keep_their_own_sliding_sides() {
 /// (the table noise-free: the offset found to f32's rounding, within 1e-5).
 #[test]
 fn a_table_start_batches_equal_single_steps() {
-    let bias = [0.2, 0.2, 0.0];
-    let one = compare_with::<StickSlipModel<H>, AccelerationDetector<64>>(
-        ModelKind::StickSlip,
-        EventSource::Detector,
-        0.0,
-        bias,
-        true,
-        Mode::Predict,
-    );
-    let table = one.model().offsets()[0];
+    let table = offsets_after_a_start([0.2, 0.2, 0.0], Mode::Predict)[0];
     assert!((table - 0.2).abs() < 1e-5, "table offset {table}");
 }

@@ -958,7 +958,7 @@ fn an_input_offset_is_removed_from_the_state() {
             fixed.remove_input_offset(b, (n - 1) as u32);
         }
         if k >= n {
-            assert!(yf.is_finite() && yl.is_finite());
+            assert!(y.is_finite() && yf.is_finite() && yl.is_finite());
             worst_fixed = worst_fixed.max((yf - y).abs());
             worst_left = worst_left.max((yl - y).abs());
         }
