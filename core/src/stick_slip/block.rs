@@ -40,9 +40,10 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
         Ok(())
     }
 
-    /// [`Self::update`] out of line (one copy of its inline paths for [`Self::update_block`]).
+    /// [`Self::update`] out of line (one copy of its inline paths for [`Self::update_block`],
+    /// and for callers' cold paths that would otherwise inline a block of their own).
     #[inline(never)]
-    pub(super) fn update_one(&mut self, table_accel: T, measured_top: T) -> T {
+    pub fn update_one(&mut self, table_accel: T, measured_top: T) -> T {
         self.update(table_accel, measured_top)
     }
 

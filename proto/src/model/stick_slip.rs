@@ -49,7 +49,7 @@ pub struct StickSlipModel<
     tuning: Option<Tuning<B::TopGain>>,
     table: [f32; BATCH],
     top: [f32; BATCH],
-    /// The base acceleration (for the tuning).
+    /// The base acceleration (for the tuning; NaN when the sample is saturated or missing).
     base: [f32; BATCH],
     max_age: f32,
     breakaways: Breakaways,
@@ -238,7 +238,12 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot> Model
         if let (Some(u), Some(y)) = (self.table.get_mut(i), self.top.get_mut(i)) {
             (*u, *y) = inputs(channels, flags, self.fuse);
             if let Some(b) = self.base.get_mut(i) {
-                *b = channels[Channel::BaseAccel.index()];
+                // (NaN when flagged: the identifications leave such a sample out.)
+                *b = if flags & flags::ACCEL_UNUSABLE == 0 {
+                    channels[Channel::BaseAccel.index()]
+                } else {
+                    f32::NAN
+                };
             }
         }
     }
@@ -257,9 +262,9 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot> Model
             };
             if self.est.phase() == SlidingPhase::Stuck {
                 // A run is in one phase (events start runs): stuck throughout, in blocks.
-                for ((f, &b), &u) in frames.iter().zip(base).zip(table) {
-                    let ok = f.flags & flags::ACCEL_UNUSABLE == 0;
-                    fr.stuck_sample(if ok { b } else { f32::NAN }, u);
+                // (A flagged sample's base is NaN: `note_inputs`.)
+                for (&b, &u) in base.iter().zip(table) {
+                    fr.stuck_sample(b, u);
                 }
                 let mut out = [0.0f32; BATCH];
                 if let Some(pred) = out.get_mut(..frames.len()) {
@@ -271,12 +276,7 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot> Model
                 }
             } else {
                 for (((f, &u), &y), &b) in frames.iter_mut().zip(table).zip(top).zip(base) {
-                    // A saturated or missing base sample holds the slip acceleration.
-                    let b = if f.flags & flags::ACCEL_UNUSABLE == 0 {
-                        b
-                    } else {
-                        f32::NAN
-                    };
+                    // A saturated or missing base sample (NaN) holds the slip acceleration.
                     if let Some(mu) = fr.sample(b, u, y, true) {
                         self.est.set_friction(mu);
                     }
@@ -369,18 +369,67 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
     /// in predict mode the sliding samples' top acceleration from the base accelerometer (the
     /// momentum balance) for the sliding observer and the adoptions of f, ξ and μ; in fuse mode
     /// the measured top less its identified offset, and the top accelerometer's tuning.
+    ///
+    /// (A steady run, past the open-loop start, works in the batch's own input arrays: the
+    /// identifications read the measured samples first, then the model's inputs replace them
+    /// and its predictions the base's; no array on the stack to clear (~10 instructions per
+    /// sample), no pass of its own for the flags. The open-loop start's runs keep the measured
+    /// samples beside the inputs: [`Self::predict_open_run`].)
     #[inline(always)]
     fn predict_run_base(&mut self, frames: &mut [Frame], from: usize) {
         // (Without a rest: a run is split at the open-loop start's end, where the top offset
         // (fuse mode) or the table's (predict mode) may be adopted, so that every batching
         // adopts it at the same sample.)
         let open = self.base_tuning.get().map_or(0, BaseTuning::open_start);
-        if open > 0 && open < frames.len() {
-            let (first, rest) = frames.split_at_mut(open);
-            self.predict_run_base(first, from);
-            self.predict_run_base(rest, from + open);
+        if open > 0 {
+            if open < frames.len() {
+                let (first, rest) = frames.split_at_mut(open);
+                self.predict_open_run(first, from);
+                self.predict_run_base(rest, from + open);
+            } else {
+                self.predict_open_run(frames, from);
+            }
             return;
         }
+        let to = from + frames.len();
+        let level = self.est.phase().level();
+        let fuse = self.fuse;
+        let (Some(bt), Some(table), Some(base), Some(top)) = (
+            self.base_tuning.get_mut(),
+            self.table.get_mut(from..to),
+            self.base.get_mut(from..to),
+            self.top.get_mut(from..to),
+        ) else {
+            return;
+        };
+        // The identifications read the measured samples (nothing they do changes the model's
+        // inputs or its state before the checks below).
+        bt.push_run(base, top);
+        if let Some(t) = &mut self.tuning {
+            t.push_run(top, base);
+        }
+        let off = bt.offset();
+        for ((y, u), &b) in top.iter_mut().zip(table.iter_mut()).zip(base.iter()) {
+            *y = if fuse {
+                bt.top_corrected(*y)
+            } else {
+                bt.top_of(b, level)
+            };
+            *u -= off;
+        }
+        if self.est.update_block(table, top, base).is_ok() {
+            for (f, &p) in frames.iter_mut().zip(base.iter()) {
+                f.prediction = p;
+            }
+        }
+        self.after_run(frames.len(), level);
+    }
+
+    /// [`Self::predict_run_base`] over a run in the open-loop start (its first runs only): the
+    /// measured samples kept beside the model's inputs for the start's notes.
+    #[cold]
+    #[inline(never)]
+    fn predict_open_run(&mut self, frames: &mut [Frame], from: usize) {
         let to = from + frames.len();
         let (Some(bt), Some(table), Some(base), Some(measured)) = (
             self.base_tuning.get_mut(),
@@ -392,54 +441,40 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
         };
         let level = self.est.phase().level();
         let (off, fuse) = (bt.offset(), self.fuse);
-        let (mut top, mut good, mut u) = ([0.0f32; BATCH], [0.0f32; BATCH], [0.0f32; BATCH]);
-        for (((((y, g), u), f), (&b, &t)), &m) in top
-            .iter_mut()
-            .zip(good.iter_mut())
-            .zip(u.iter_mut())
-            .zip(frames.iter())
-            .zip(base.iter().zip(table))
-            .zip(measured)
-        {
-            *g = if f.flags & flags::ACCEL_UNUSABLE == 0 {
-                b
-            } else {
-                f32::NAN
-            };
-            *y = if fuse {
-                bt.top_corrected(m)
-            } else {
-                bt.top_of(*g, level)
-            };
+        let (mut top, mut u) = ([0.0f32; BATCH], [0.0f32; BATCH]);
+        for ((y, u), (&b, &t)) in top.iter_mut().zip(u.iter_mut()).zip(base.iter().zip(table)) {
+            // (Fuse mode: no stuck-phase observer in the open-loop start.)
+            *y = if fuse { f32::NAN } else { bt.top_of(b, level) };
             *u = t - off;
         }
         let n = frames.len();
-        if open > 0 && fuse {
-            // (The open-loop start: no stuck-phase observer.)
-            top.iter_mut().take(open.min(n)).for_each(|y| *y = f32::NAN);
-        }
+        // (Sample by sample, bit for bit `update_block`: the image holds one block loop.)
         let mut out = [0.0f32; BATCH];
-        if let (Some(top), Some(good), Some(table), Some(pred)) =
-            (top.get(..n), good.get(..n), u.get(..n), out.get_mut(..n))
-        {
-            if self.est.update_block(table, top, pred).is_ok() {
-                for (f, &p) in frames.iter_mut().zip(pred.iter()) {
-                    f.prediction = p;
-                }
-                if open > 0 && fuse {
-                    bt.note_open_start(measured, pred);
-                }
-            }
-            bt.push_run(good, measured);
+        for (((f, o), &u), &y) in frames.iter_mut().zip(out.iter_mut()).zip(&u).zip(&top) {
+            *o = self.est.update_one(u, y);
+            f.prediction = *o;
         }
-        if open > 0 && !fuse {
+        if fuse {
+            bt.note_open_start(measured, out.get(..n).unwrap_or(&[]));
+        }
+        bt.push_run(base, measured);
+        if let Some(t) = &mut self.tuning {
+            t.push_run(measured, base);
+        }
+        if !fuse {
             table_start(bt, &mut self.est, table, frames);
         }
+        self.after_run(n, level);
+    }
+
+    /// The base tuning's check that was due after a run begun in phase `level`: its adoptions.
+    #[inline(never)]
+    fn base_check(&mut self, level: i8) {
+        let Some(bt) = self.base_tuning.get_mut() else {
+            return;
+        };
         let before = bt.mu_for(level);
-        // (The run's top scale: a change from the check's adoptions reaches the tuning from the
-        // next run, batches and single steps alike.)
-        let scale = bt.top_scale();
-        let (c, mu) = bt.check(n as u32);
+        let (c, mu) = bt.check_due();
         if let Some(c) = c {
             self.est.retune(c);
         }
@@ -452,6 +487,25 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
                 self.est.shift_top(d);
             }
         }
+    }
+
+    /// The checks after a run of `n` samples begun in phase `level`: the base tuning's
+    /// adoptions (f and ξ, μ, the top's offset and gain) and, in fuse mode, the oscillator
+    /// identification's. (Out of line: once per run, and one copy for both kinds of run.)
+    #[inline(never)]
+    fn after_run(&mut self, n: usize, level: i8) {
+        let Some(bt) = self.base_tuning.get_mut() else {
+            return;
+        };
+        // (The run's top scale: a change from the check's adoptions reaches the tuning from the
+        // next run, batches and single steps alike.)
+        let scale = bt.top_scale();
+        if bt.due(n as u32) {
+            self.base_check(level);
+        }
+        let Some(bt) = self.base_tuning.get_mut() else {
+            return;
+        };
         // (The identification reads the measured top as it is: its offsets filtered out, its
         // gain the one to find; f and ξ are fitted on it scaled by the gain correction in use.)
         if let Some(t) = &mut self.tuning {
@@ -464,7 +518,6 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
                     self.est.retune(c);
                 }
             }
-            t.push_run(measured, base);
             if let Some(c) = t.check(n as u32) {
                 self.est.retune(c);
             }

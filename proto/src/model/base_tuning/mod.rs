@@ -351,12 +351,29 @@ impl BaseTuning {
     }
 
     /// Count `samples` samples; at a check, the coefficients (f, ξ) and the friction coefficient
-    /// to adopt, if any.
+    /// to adopt, if any ([`Self::due`], then [`Self::check_due`]).
     pub fn check(&mut self, samples: u32) -> (Option<StickSlipCoefficients<f32>>, Option<f32>) {
-        if self.countdown > samples {
-            self.countdown -= samples;
+        if !self.due(samples) {
             return (None, None);
         }
+        self.check_due()
+    }
+
+    /// Count `samples` samples: whether a check is due (then [`Self::check_due`] makes it).
+    /// (The model tests this before it asks for the adoptions: their answer is ~130 bytes, and
+    /// building and copying an empty one took ~8 instructions per sample.)
+    #[inline(always)]
+    pub fn due(&mut self, samples: u32) -> bool {
+        if self.countdown > samples {
+            self.countdown -= samples;
+            return false;
+        }
+        true
+    }
+
+    /// The check that [`Self::due`] found due: the coefficients (f, ξ) and the friction
+    /// coefficient to adopt, if any.
+    pub fn check_due(&mut self) -> (Option<StickSlipCoefficients<f32>>, Option<f32>) {
         // (Until the first adoption: μ in predict mode, a top offset in fuse mode, from the
         // open-loop start or the momentum balance: fast checks continued after the start's
         // took Table 2 test 2's combined row from 0.25 to 0.64 % RMS, the table's offset then
