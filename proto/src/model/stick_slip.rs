@@ -393,7 +393,6 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
         }
         let to = from + frames.len();
         let level = self.est.phase().level();
-        let fuse = self.fuse;
         let (Some(bt), Some(table), Some(base), Some(top)) = (
             self.base_tuning.get_mut(),
             self.table.get_mut(from..to),
@@ -408,13 +407,9 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
         if let Some(t) = &mut self.tuning {
             t.push_run(top, base);
         }
+        bt.tops_in_place(top, base, level);
         let off = bt.offset();
-        for ((y, u), &b) in top.iter_mut().zip(table.iter_mut()).zip(base.iter()) {
-            *y = if fuse {
-                bt.top_corrected(*y)
-            } else {
-                bt.top_of(b, level)
-            };
+        for u in table.iter_mut() {
             *u -= off;
         }
         if self.est.update_block(table, top, base).is_ok() {

@@ -321,6 +321,28 @@ impl BaseTuning {
         (1.0 + self.r) * self.mu_for(level) * self.g * sign(level) - self.r * (base - self.offset)
     }
 
+    /// The model's top inputs of a run in phase `level`, in place of its measured tops `top`:
+    /// in fuse mode those corrected ([`Self::top_corrected`]), in predict mode [`Self::top_of`]
+    /// its base samples `base`. The same numbers, with the run's constants read once (~9
+    /// instructions per sample fewer on the M4F than a call per sample).
+    #[inline(always)]
+    pub fn tops_in_place(&self, top: &mut [f32], base: &[f32], level: i8) {
+        if self.fuse {
+            let (o, s) = (self.top_offset, self.top_scale);
+            for y in top.iter_mut() {
+                *y = (*y - o) * s;
+            }
+        } else if level == 0 {
+            top.iter_mut().for_each(|y| *y = f32::NAN);
+        } else {
+            let c = (1.0 + self.r) * self.mu_for(level) * self.g * sign(level);
+            let (r, off) = (self.r, self.offset);
+            for (y, &b) in top.iter_mut().zip(base) {
+                *y = c - r * (b - off);
+            }
+        }
+    }
+
     /// Predict mode: the friction coefficient to set at an event into phase `level`, `age`
     /// samples old (`None` when stuck, for an event the estimator rejects, and in fuse mode,
     /// whose μ comes from the top accelerometer).
