@@ -49,7 +49,8 @@ pub struct StickSlipModel<
     tuning: Option<Tuning<B::TopGain>>,
     table: [f32; BATCH],
     top: [f32; BATCH],
-    /// The base acceleration (for the tuning; NaN when the sample is saturated or missing).
+    /// The base acceleration (for the tuning; NaN when the sample is saturated or missing,
+    /// except in the fixed-base model).
     base: [f32; BATCH],
     max_age: f32,
     breakaways: Breakaways,
@@ -238,8 +239,10 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot> Model
         if let (Some(u), Some(y)) = (self.table.get_mut(i), self.top.get_mut(i)) {
             (*u, *y) = inputs(channels, flags, self.fuse);
             if let Some(b) = self.base.get_mut(i) {
-                // (NaN when flagged: the identifications leave such a sample out.)
-                *b = if flags & flags::ACCEL_UNUSABLE == 0 {
+                // (NaN when flagged: the identifications leave such a sample out. The
+                // fixed-base model's only reader, the oscillator identification, leaves it out
+                // by its NaN top already.)
+                *b = if !EVENTS || flags & flags::ACCEL_UNUSABLE == 0 {
                     channels[Channel::BaseAccel.index()]
                 } else {
                     f32::NAN
