@@ -59,19 +59,20 @@ impl<T: Real, const N: usize, const K: usize> PagedNormal<T, N, K> {
     /// sample) is skipped: in the sums it would end the fit for good.
     #[inline(always)]
     pub fn add(&mut self, phi: &[T; N], t: T) {
-        if !phi.iter().fold(t * t, |q, &p| q + p * p).is_finite() {
-            return;
-        }
-        // The row's values and target side by side, [φ, t]; the products in the sums' order
+        // The row's values and target side by side, [φ, t] (built element by element: a zeroed
+        // array to fill took a `memclr` call per row); the products in the sums' order
         // ([`Self::PAIRS`]). The firmware is built for size, which unrolls no loop: the sizes in
         // use are written out (~4 instructions a product on the M4F instead of ~13; ~25 of the
-        // fuse mode's instructions per sample while sliding).
-        let mut x = [T::ZERO; MAX_N + 1];
-        for (x, &p) in x.iter_mut().zip(phi) {
-            *x = p;
-        }
-        if let Some(x) = x.get_mut(N) {
-            *x = t;
+        // fuse mode's instructions per sample while sliding), the squares' test too.
+        let at = |i: usize| phi.get(i).copied().unwrap_or(t);
+        let x: [T; MAX_N + 1] = [at(0), at(1), at(2), at(3), at(4)];
+        let squares = match N {
+            4 => t * t + x[0] * x[0] + x[1] * x[1] + x[2] * x[2] + x[3] * x[3],
+            3 => t * t + x[0] * x[0] + x[1] * x[1] + x[2] * x[2],
+            _ => phi.iter().fold(t * t, |q, &p| q + p * p),
+        };
+        if !squares.is_finite() {
+            return;
         }
         let p = &mut self.page;
         match N {

@@ -470,7 +470,13 @@ impl<T: Real, G: GainRows<T>> OscillatorIdentifier<T, G> {
             (s[0] * c[1] - s[1] * c[0]) / det,
         ];
         let e2 = self.e2 + (e * e - self.e2) * self.alpha;
-        let finite = s.iter().chain(&c).all(|v| v.is_finite()) && e2.is_finite();
+        // (Written out: the firmware, built for size, would loop over the five.)
+        let finite = s[0].is_finite()
+            && s[1].is_finite()
+            && s[2].is_finite()
+            && c[0].is_finite()
+            && c[1].is_finite()
+            && e2.is_finite();
         if finite {
             if !self.restart_due {
                 self.gain.row(x, t_raw, e, self.alpha);
