@@ -111,37 +111,38 @@ fn check_common(v: &Value, samples: u64) {
     assert!(num(v, "reversals") >= 1.0);
     assert!(num(v, "flash_bytes") > 0.0 && num(v, "ram_bytes") > 0.0);
     assert!(num(v, "board_flash_bytes") <= num(&v["goals"], "board_flash_budget_bytes"));
-    // Measured 83 728 B (stick-slip, fuse, Coulomb, with the offsets' identification from the
+    // Measured 85 200 B (stick-slip, fuse, Coulomb, with the offsets' identification from the
     // sliding phases and the open-loop starts (the top's, and predict mode's table start against
     // the plan with its state correction: +2.0 KB), the table's gain against the displacement, the
     // top's gain from the stuck phases, f and ξ from the input's start, the first slides'
-    // friction from the slip starts and the M of either mode: 51 172 B without them; the
-    // velocity-dependent law is compiled in only for a scene with one); the budget is 96 KiB,
-    // bounded here a little above the measured size so that a regression fails.
-    assert!(num(v, "board_flash_bytes") <= 83.0 * 1024.0);
+    // friction from the slip starts and the M of either mode: 51 172 B without them; +1.5 KB in
+    // the eleventh session for speed: the open-loop start's runs apart from the steady ones, the
+    // least squares' rows written out; the velocity-dependent law is compiled in only for a
+    // scene with one); the budget is 96 KiB, bounded here a little above the measured size so
+    // that a regression fails.
+    assert!(num(v, "board_flash_bytes") <= 84.0 * 1024.0);
     assert!(num(v, "board_ram_bytes") <= 8.0 * 1024.0);
     // The model as the pipeline runs it, all identification on, against the issue's budget of
-    // 50 instructions per steady sample (reported, not met yet by the fuse-mode stick-slip and
-    // fixed-base models: measured 252.3 (96.8 before the offsets' identification from the
-    // sliding phases, 231.1 before the top's offset and gain from the start and the stuck
-    // phases, 245.0 before f and ξ on the corrected top, 262.0 before f and ξ from the
-    // input's start, 255.8 before the breakaway's friction, 251.7 before the slides' μ from
-    // the sliding side and M from the slip starts, 251.8 before the observer held wide and
-    // predict mode's table start, none of which is on the samples' path:
-    // the compiler's inlining and the structures' layout move these by ±15, so the model's
-    // and the base tuning's are fixed, `repr(C)`) and 93.7; rectangular 22.9). Bounded a
-    // little above the measured figures, so a regression fails.
+    // 50 instructions per steady sample (reported, not met by the stick-slip and fixed-base
+    // models): measured 165.2 in fuse mode and 138.0 in predict mode (252.3 and 199.9 before
+    // the eleventh session's work on the samples' path: docs/PERFORMANCE.md; 96.8 before the
+    // offsets' identification from the sliding phases), fixed-base 94.1, rectangular 22.9. The
+    // compiler's inlining and the structures' layout move these by a few (the model's and the
+    // base tuning's layouts are fixed, `repr(C)`). Bounded a little above the measured figures,
+    // so a regression fails.
     let model = num(v, "instructions_per_steady_sample_model");
     println!(
-        "{} model as the pipeline runs it: {model:.2} instructions per steady sample (estimator \
-         {:.2})",
+        "{} model ({} mode) as the pipeline runs it: {model:.2} instructions per steady sample \
+         (estimator {:.2})",
         v["model"],
+        v["mode"],
         num(v, "instructions_per_steady_sample")
     );
-    let bound = if v["model"] == "rectangular" {
-        25.0
-    } else {
-        275.0
+    let bound = match (v["model"].as_str(), v["mode"].as_str()) {
+        (Some("rectangular"), _) => 25.0,
+        (Some("fixed-base"), _) => 100.0,
+        (_, Some("predict")) => 145.0,
+        _ => 175.0,
     };
     assert!(
         model.is_finite() && model > 0.0 && model <= bound,
