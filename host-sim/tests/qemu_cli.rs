@@ -126,7 +126,7 @@ fn check_common(v: &Value, samples: u64) {
     // 50 instructions per steady sample (reported, not met by the stick-slip and fixed-base
     // models): measured 165.2 in fuse mode and 138.0 in predict mode (252.3 and 199.9 before
     // the eleventh session's work on the samples' path: docs/PERFORMANCE.md; 96.8 before the
-    // offsets' identification from the sliding phases), fixed-base 94.1, rectangular 22.9. The
+    // offsets' identification from the sliding phases), fixed-base 93.8, rectangular 22.9. The
     // compiler's inlining and the structures' layout move these by a few (the model's and the
     // base tuning's layouts are fixed, `repr(C)`). Bounded a little above the measured figures,
     // so a regression fails.

@@ -104,17 +104,18 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
             z[0].is_finite() && z[1].is_finite()
         } else {
             // No measured top (predict mode's stuck phases; a missing sample): the open map, as
-            // `update` takes it, while the tops stay missing; a finite top (`seen`) makes
-            // the run redo sample by sample. (Before, the closed map's NaN state sent every
-            // such run to that redo: ~30 instructions per sample more in predict mode.)
+            // `update` takes it, while the tops the maps read (each sample's predecessor's) stay
+            // missing; a finite one (`seen`) makes the run redo sample by sample. (Before, the
+            // closed map's NaN state sent every such run to that redo: ~30 instructions per
+            // sample more in predict mode.)
             let open = self.open;
-            let (mut u0, mut z, mut seen) = (prev.u, prev.z, false);
+            let (mut u0, mut y0, mut z, mut seen) = (prev.u, prev.y, prev.z, false);
             for ((s, (&u, &y)), o) in samples {
+                seen |= y0.is_finite();
                 z = stuck_map(&open, z, T::ZERO, u0, u);
                 *s = Slot { u, y, z };
                 *o = z[0];
-                u0 = u;
-                seen |= y.is_finite();
+                (u0, y0) = (u, y);
             }
             !seen && z[0].is_finite() && z[1].is_finite()
         };

@@ -191,7 +191,8 @@ pub trait Model {
         let _ = slip_accel;
     }
     /// Predict `frames`, samples `from ..` of the batch: a run with no event after its first
-    /// sample. Bit for bit the same as one sample at a time.
+    /// sample. Bit for bit the same as one sample at a time. It uses up the inputs noted for
+    /// those samples (a model may work in place of them): each range is predicted once.
     fn predict_run(&mut self, frames: &mut [Frame], from: usize);
     /// The identified friction coefficient, if the model identifies it and has an estimate.
     fn mu_estimate(&self) -> Option<MuEstimate>;

@@ -47,10 +47,14 @@ pub struct StickSlipModel<
     /// f and ξ identified and adopted online (fuse mode), with the top accelerometer's gain
     /// beside a [`BaseTuning`] (which corrects the top by it).
     tuning: Option<Tuning<B::TopGain>>,
+    /// The batch's noted inputs (`note_inputs`), used up by its runs: the table acceleration
+    /// (a steady run with a base tuning leaves it less the table offset in use),
     table: [f32; BATCH],
+    /// the measured top acceleration (NaN when unusable or in predict mode; such a run leaves
+    /// the model's top input),
     top: [f32; BATCH],
-    /// The base acceleration (for the tuning; NaN when the sample is saturated or missing,
-    /// except in the fixed-base model).
+    /// and the base acceleration (NaN when the sample is saturated or missing, for a base tuning
+    /// or a friction law; such a run leaves its predictions).
     base: [f32; BATCH],
     max_age: f32,
     breakaways: Breakaways,
@@ -239,10 +243,11 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot> Model
         if let (Some(u), Some(y)) = (self.table.get_mut(i), self.top.get_mut(i)) {
             (*u, *y) = inputs(channels, flags, self.fuse);
             if let Some(b) = self.base.get_mut(i) {
-                // (NaN when flagged: the identifications leave such a sample out. The
-                // fixed-base model's only reader, the oscillator identification, leaves it out
-                // by its NaN top already.)
-                *b = if !EVENTS || flags & flags::ACCEL_UNUSABLE == 0 {
+                // (NaN when flagged, for the readers that need it: the base tuning and a
+                // friction law leave such a sample out by it. A model without either, the
+                // fixed-base one, has the oscillator identification as its only reader, which
+                // leaves it out by its NaN top already.)
+                *b = if !(B::TUNES || F::FOLLOWS_LAW) || flags & flags::ACCEL_UNUSABLE == 0 {
                     channels[Channel::BaseAccel.index()]
                 } else {
                     f32::NAN
