@@ -415,11 +415,7 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
         if let Some(t) = &mut self.tuning {
             t.push_run(top, base);
         }
-        bt.tops_in_place(top, base, level);
-        let off = bt.offset();
-        for u in table.iter_mut() {
-            *u -= off;
-        }
+        bt.inputs_in_place(table, top, base, level);
         if self.est.update_block(table, top, base).is_ok() {
             for (f, &p) in frames.iter_mut().zip(base.iter()) {
                 f.prediction = p;
