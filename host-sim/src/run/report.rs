@@ -158,7 +158,7 @@ impl From<ssvr_proto::model::FrictionReport> for FrictionLawJson {
     }
 }
 
-/// The f and ξ a model used at the end of a run (`estimator.identified.in_use`).
+/// The f, ξ and m1 a model used at the end of a run (`estimator.identified.in_use`).
 #[derive(Debug, Clone, Serialize)]
 pub struct InUse {
     /// Natural frequency (Hz).
@@ -167,6 +167,8 @@ pub struct InUse {
     pub damping_ratio: f64,
     /// Adoptions of identified values during the run.
     pub adoptions: u32,
+    /// Top mass (kg): the prior's, or the one the mass identification took.
+    pub m1_kg: f64,
 }
 
 impl Identified {
@@ -193,6 +195,7 @@ impl Identified {
                 natural_frequency_hz: o.natural_frequency_hz,
                 damping_ratio: o.damping_ratio,
                 adoptions: o.adoptions,
+                m1_kg: o.m1_kg,
             }),
             static_friction_coefficient_std: static_friction.map(|s| s.std),
             static_friction_slip_starts: static_friction.map(|s| s.slip_starts),

@@ -272,6 +272,9 @@ pub struct OscillatorReport {
     pub damping_ratio: f64,
     /// Adoptions so far.
     pub adoptions: u32,
+    /// The top mass in use (kg): the prior's, or the one the mass identification took (fuse
+    /// mode from the momentum balance, predict mode from the slip starts).
+    pub m1_kg: f64,
 }
 
 impl<G: GainRows<f32>> Tuning<G> {
@@ -282,7 +285,7 @@ impl<G: GainRows<f32>> Tuning<G> {
 }
 
 impl Adoption {
-    /// The report of an identifier's `estimate` and the f and ξ in use.
+    /// The report of an identifier's `estimate` and the f, ξ and m1 in use.
     pub fn report(&self, estimate: Option<OscillatorEstimate>) -> OscillatorReport {
         let (f, xi, n) = self.in_use();
         OscillatorReport {
@@ -290,6 +293,7 @@ impl Adoption {
             natural_frequency_hz: f,
             damping_ratio: xi,
             adoptions: n,
+            m1_kg: self.params.m1_kg,
         }
     }
 }
