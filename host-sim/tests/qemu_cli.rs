@@ -111,7 +111,7 @@ fn check_common(v: &Value, samples: u64) {
     assert!(num(v, "reversals") >= 1.0);
     assert!(num(v, "flash_bytes") > 0.0 && num(v, "ram_bytes") > 0.0);
     assert!(num(v, "board_flash_bytes") <= num(&v["goals"], "board_flash_budget_bytes"));
-    // Measured 85 264 B (stick-slip, fuse, Coulomb, with the offsets' identification from the
+    // Measured 85 448 B (stick-slip, fuse, Coulomb, with the offsets' identification from the
     // sliding phases and the open-loop starts (the top's, and predict mode's table start against
     // the plan with its state correction: +2.0 KB), the table's gain against the displacement, the
     // top's gain from the stuck phases, f and ξ from the input's start, the first slides'
@@ -124,7 +124,7 @@ fn check_common(v: &Value, samples: u64) {
     assert!(num(v, "board_ram_bytes") <= 8.0 * 1024.0);
     // The model as the pipeline runs it, all identification on, against the budget of
     // 50 instructions per steady sample (reported, not met by the stick-slip and fixed-base
-    // models): measured 164.7 in fuse mode and 137.2 in predict mode (252.3 and 199.9 before
+    // models): measured 164.3 in fuse mode and 136.7 in predict mode (252.3 and 199.9 before
     // the eleventh session's work on the samples' path: docs/PERFORMANCE.md; 96.8 before the
     // offsets' identification from the sliding phases), fixed-base 93.8, rectangular 22.9. The
     // compiler's inlining and the structures' layout move these by a few (the model's and the

@@ -439,14 +439,23 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
             return;
         };
         let level = self.est.phase().level();
-        let (off, fuse) = (bt.offset(), self.fuse);
+        let (fuse, n) = (self.fuse, frames.len());
+        // The model's inputs beside the measured samples (the steady runs' way, on copies).
         let (mut top, mut u) = ([0.0f32; BATCH], [0.0f32; BATCH]);
-        for ((y, u), (&b, &t)) in top.iter_mut().zip(u.iter_mut()).zip(base.iter().zip(table)) {
-            // (Fuse mode: no stuck-phase observer in the open-loop start.)
-            *y = if fuse { f32::NAN } else { bt.top_of(b, level) };
-            *u = t - off;
+        for ((y, u), (&m, &t)) in top
+            .iter_mut()
+            .zip(u.iter_mut())
+            .zip(measured.iter().zip(table))
+        {
+            (*y, *u) = (m, t);
         }
-        let n = frames.len();
+        if let (Some(y), Some(u)) = (top.get_mut(..n), u.get_mut(..n)) {
+            bt.inputs_in_place(u, y, base, level);
+        }
+        if fuse {
+            // (No stuck-phase observer in the open-loop start.)
+            top.fill(f32::NAN);
+        }
         // (Sample by sample, bit for bit `update_block`: the image holds one block loop.)
         let mut out = [0.0f32; BATCH];
         for (((f, o), &u), &y) in frames.iter_mut().zip(out.iter_mut()).zip(&u).zip(&top) {
