@@ -26,12 +26,12 @@ pub fn parse(name: &str) -> Result<Model, String> {
 }
 
 /// The model a scene calls for, from a simulation of the prior specimen (what the controller is
-/// told) on the planned input (the scene's table motion), with the reason in words.
+/// told) on the planned input (without the table's lag), with the reason in words.
 pub fn choose_for(scene: &Scene) -> Result<(Model, String)> {
     let prior = crate::pipeline::specimen_of(scene);
     let structure = Structure::new(prior.structure)
         .map_err(|e| anyhow!("the prior specimen is invalid: {e}"))?;
-    let table = scene.table_motion();
+    let table = scene.planned_motion();
     let input = TruthInput::new(&structure, &table, scene.duration_s)
         .with_static_friction(prior.static_friction_coefficient)
         .with_friction(scene.estimator.friction);

@@ -85,6 +85,8 @@ pub(crate) struct Document {
     pub(crate) prior: Prior,
     pub(crate) input: Option<Input>,
     pub(crate) start_s: f64,
+    /// `[input] table_lag_s` (s; 0 without it).
+    pub(crate) table_lag_s: f64,
     pub(crate) sensors: Sensors,
     pub(crate) board: BoardSettings,
     /// `[recording]` (a replay scene only).
@@ -161,9 +163,13 @@ impl ParseContext<'_> {
             }
             _ => None,
         };
-        let (input, start_s) = match &raw.input {
-            Some(table) => (Some(self.input(table)?), self.start(table)?),
-            None => (None, 0.0),
+        let (input, start_s, table_lag_s) = match &raw.input {
+            Some(table) => (
+                Some(self.input(table)?),
+                self.start(table)?,
+                self.table_lag(table)?,
+            ),
+            None => (None, 0.0, 0.0),
         };
         let raw_sensors = raw.sensors.as_ref();
         let sensors = self.sensors_or_default(raw_sensors)?;
@@ -179,6 +185,7 @@ impl ParseContext<'_> {
             prior,
             input,
             start_s,
+            table_lag_s,
             sensors,
             board,
             recording: None,
@@ -281,6 +288,7 @@ impl ParseContext<'_> {
             prior,
             input: None,
             start_s: recording.start_s,
+            table_lag_s: 0.0,
             board: BoardSettings::defaults(1.0, &sensors),
             sensors,
             recording: Some(recording),

@@ -105,31 +105,49 @@ pub(crate) struct RawInput {
     units: Option<Spanned<Units>>,
     scale: Option<Spanned<f64>>,
     start_s: Option<Spanned<f64>>,
+    table_lag_s: Option<Spanned<f64>>,
 }
 
 impl ParseContext<'_> {
     /// `[input] start_s`: the table at rest until then (s; 0 when absent). Table motion only.
     pub(crate) fn start(&self, table: &Spanned<RawInput>) -> Result<f64, SceneError> {
-        let r = table.get_ref();
-        let Some(v) = &r.start_s else {
+        self.table_seconds(table, "start_s", &table.get_ref().start_s)
+    }
+
+    /// `[input] table_lag_s`: how late the table follows the planned input (s; 0 when absent):
+    /// the simulated table's motion is the input delayed by it, what the controller is told of
+    /// the input is not (a servo table's lag). Table motion only.
+    pub(crate) fn table_lag(&self, table: &Spanned<RawInput>) -> Result<f64, SceneError> {
+        self.table_seconds(table, "table_lag_s", &table.get_ref().table_lag_s)
+    }
+
+    /// A time of the table's motion, `[input] key` (s, finite, ≥ 0; 0 when absent): an error
+    /// for a reversals input (a friction train has no table motion).
+    fn table_seconds(
+        &self,
+        table: &Spanned<RawInput>,
+        key: &str,
+        value: &Option<Spanned<f64>>,
+    ) -> Result<f64, SceneError> {
+        let Some(v) = value else {
             return Ok(0.0);
         };
-        if *r.kind.get_ref() == Kind::Reversals {
+        if *table.get_ref().kind.get_ref() == Kind::Reversals {
             return Err(self.err(
                 v.span(),
                 format!(
-                    "[input] start_s = {} does not apply to kind = \"reversals\" (a friction \
-                     train has no table motion to start late)",
+                    "[input] {key} = {} does not apply to kind = \"reversals\" (a friction \
+                     train has no table motion)",
                     v.get_ref()
                 ),
             ));
         }
         self.check(
             Some("input"),
-            "start_s",
+            key,
             v,
             v.get_ref().is_finite() && *v.get_ref() >= 0.0,
-            "start_s >= 0 s",
+            &format!("{key} >= 0 s"),
         )
     }
 

@@ -38,6 +38,10 @@ pub struct Scene {
     pub estimator: Prior,
     /// The table at rest until then (s, `[input] start_s`; 0: the input starts at once).
     pub start_s: f64,
+    /// How late the simulated table follows the planned input (s, `[input] table_lag_s`; 0:
+    /// it follows it exactly). The truth's table motion ([`Self::table_motion`]) is delayed by
+    /// it, the plan the controller is told ([`Self::planned_motion`]) is not.
+    pub table_lag_s: f64,
     /// The input.
     pub input: Input,
     /// Sensor models.
@@ -73,6 +77,7 @@ impl Scene {
             friction: FrictionLaw::Coulomb,
             estimator: Prior::exact(&structure, 0.2, FrictionLaw::Coulomb),
             start_s: 0.0,
+            table_lag_s: 0.0,
             input: Input::Harmonic {
                 amplitude_m_s2: 2.0,
                 period_s: 0.143,
@@ -108,6 +113,7 @@ impl Scene {
             friction: doc.friction,
             estimator: doc.prior,
             start_s: doc.start_s,
+            table_lag_s: doc.table_lag_s,
             input,
             sensors: doc.sensors,
             board: doc.board,
@@ -124,12 +130,23 @@ impl Scene {
         self.structure.gmu()
     }
 
-    /// The table acceleration (none for a reversals scene).
+    /// The table acceleration (none for a reversals scene): the input from `start_s` on, as
+    /// late as the table's lag (`table_lag_s`).
     pub fn table_motion(&self) -> TableMotion {
+        self.motion_from(self.start_s + self.table_lag_s)
+    }
+
+    /// The planned table acceleration: the input from `start_s` on, without the table's lag
+    /// (what the controller is told; its choice of model simulates the prior on it).
+    pub fn planned_motion(&self) -> TableMotion {
+        self.motion_from(self.start_s)
+    }
+
+    fn motion_from(&self, start_s: f64) -> TableMotion {
         let motion = self.input_motion();
-        if self.start_s > 0.0 {
+        if start_s > 0.0 {
             TableMotion::Delayed {
-                start_s: self.start_s,
+                start_s,
                 motion: Box::new(motion),
             }
         } else {

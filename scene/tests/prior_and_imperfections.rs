@@ -124,6 +124,35 @@ fn bad_values_are_named_with_file_line_and_key() {
     error_at(&sens("disp_bias_m = nan"), line, &["[sensors] disp_bias_m"]);
     let rest = |v: &str| BASE.replace("[input]", &format!("[input]\nstart_s = {v}"));
     error_at(&rest("-0.1"), 10, &["[input] start_s"]);
+    let lag = |v: &str| BASE.replace("[input]", &format!("[input]\ntable_lag_s = {v}"));
+    error_at(&lag("-0.001"), 10, &["[input] table_lag_s", ">= 0"]);
+    error_at(&lag("inf"), 10, &["[input] table_lag_s"]);
+}
+
+/// `[input] table_lag_s`: the truth's table follows the input that late after `start_s`, the
+/// plan the controller is told does not; 0 when absent; not for a friction train.
+#[test]
+fn the_tables_lag_delays_the_truth_not_the_plan() {
+    let plain = parse(BASE).unwrap();
+    assert_eq!(plain.table_lag_s, 0.0);
+    let text = BASE.replace("[input]", "[input]\nstart_s = 0.5\ntable_lag_s = 0.002");
+    let s = parse(&text).unwrap();
+    assert_eq!((s.start_s, s.table_lag_s), (0.5, 0.002));
+    let (truth, plan, input) = (s.table_motion(), s.planned_motion(), s.input_motion());
+    for t in [0.3, 0.5, 0.501, 0.5019] {
+        assert_eq!(truth.accel(t), 0.0, "the table at rest at t = {t}");
+    }
+    for t in [0.502, 0.51, 0.7, 1.2] {
+        assert_eq!(truth.accel(t), input.accel(t - 0.502), "t = {t}");
+    }
+    for t in [0.5, 0.501, 0.51, 1.2] {
+        assert_eq!(plan.accel(t), input.accel(t - 0.5), "t = {t}");
+    }
+    let reversals = "duration_s = 1.0\n[structure]\nm1_kg = 2.0\nm2_kg = 1.0\nnatural_period_s = 0.2\n\
+                     damping_ratio = 0.02\nfriction_coefficient = 0.2\n[input]\nkind = \"reversals\"\n\
+                     half_period_s = 0.1\ntable_lag_s = 0.001\n[sampling]\nrate_hz = 1000.0\n";
+    let e = parse(reversals).unwrap_err().to_string();
+    assert!(e.contains("table_lag_s") && e.contains("reversals"), "{e}");
 }
 
 #[test]
