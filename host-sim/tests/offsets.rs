@@ -236,19 +236,18 @@ fn the_top_gain_is_found_before_the_first_slide() {
 }
 
 /// Predict mode without a rest: the table accelerometer's offset from the input's start
-/// against the plan (`BaseTuning::note_table_start`: the intercept of the measured table's
-/// least-squares line over the first 0.1 rad of p less the planned input's), and the model's
-/// response to it over those samples removed from its state
-/// (`StickSlipEstimator::remove_input_offset`). Every accelerometer 0.05 g off (table +,
-/// base −), on the first 2 s of the default scene and of El Centro (stuck throughout).
-/// Measured: the table's offset 2.9e-3 m/s² low at the start (its σ from the noise 0.41 × the
-/// noise, 2.1e-3 m/s²; with a lag of one sample on the default scene's sine, 9.0e-3
-/// m/s²; the default scene's both-ways fit then found it within 2e-4), RMS 0.051 / 0.121 % of
-/// the peak (4.42 / 20.4 % before the table start: the offset drove the stuck model until the
-/// base had slid both ways; 0.228 / 0.471 % with the start's free oscillation left in the
-/// state). Unperturbed, nothing is taken (0.0263 / 0.0244 %). El Centro's record starts at
-/// 0.06 m/s²: without the plan's line the start took that for an offset, and the unperturbed
-/// 32 s went from 0.066 to 0.56 % RMS.
+/// against the plan (`BaseTuning::note_table_start`, `ssvr_proto::table_start`: the measured
+/// table's line and first half's mean over the first 0.1 rad of p against the planned input's
+/// line, for a table any lag late), and the model's response to it over those samples removed
+/// from its state (`StickSlipEstimator::remove_input_offset`). Every accelerometer 0.05 g off
+/// (table +, base −), on the first 2 s of the default scene and of El Centro (stuck
+/// throughout). The default scene's sine starts from rest: its offset is found within 4e-3
+/// m/s² (the default scene's both-ways fit then finds it within 2e-4). El Centro's record
+/// starts at 0.06 m/s², and a table that follows it at once reads as one still at rest
+/// 0.06 m/s² higher: the start takes their midpoint, 0.03 off, and the stuck 2 s carry that
+/// (4.42 / 20.4 % RMS before the table start: the offset drove the stuck model until the base
+/// had slid both ways). Unperturbed, nothing is taken. Bounds: the measured RMS (printed) and
+/// a few % over it.
 #[test]
 fn predict_finds_the_table_offset_at_the_input_start() {
     let elcentro = elcentro_2s();
@@ -258,24 +257,74 @@ fn predict_finds_the_table_offset_at_the_input_start() {
         ("El Centro", elcentro),
     ] {
         for bias in [[g, -g, g], [0.0; 3]] {
-            let mut s = base.clone();
-            s.sensors.accel_bias_m_s2 = bias;
-            let out = go(&s, Mode::Predict);
-            let e = &out.report.estimator;
-            let found = e.identified.accel_bias_m_s2[0];
-            assert!(
-                (found - bias[0]).abs() < 4e-3,
-                "{name} {bias:?}: found {found}"
-            );
-            let r = e.rms_err_pct_of_peak;
+            let r = predict_table_start(name, &base, bias, 0.0);
+            // (Measured: 0.036 / 1.212 / 0.026 / 0.024 % RMS.)
             let bound = match (name, bias[0] == 0.0) {
-                ("default", false) => 0.06,
-                (_, false) => 0.14,
+                ("default", false) => 0.04,
+                (_, false) => 1.25,
                 _ => 0.03,
             };
             assert!(r < bound, "{name} {bias:?}: {r} % RMS");
-            assert_eq!(out.report.detection.missed, 0, "{name}");
-            assert_eq!(out.report.detection.false_, 0, "{name}");
+        }
+    }
+}
+
+/// Predict mode on `base` (`name`: "default" or "El Centro") with accelerometer offsets `bias`
+/// and the table `lag_s` late: the table's offset found within 4e-3 m/s², or within half El
+/// Centro's first acceleration (0.031 m/s²) when there is one; no event missed or invented.
+/// Returns the RMS error (% of the peak).
+fn predict_table_start(name: &str, base: &Scene, bias: [f64; 3], lag_s: f64) -> f64 {
+    let mut s = base.clone();
+    s.sensors.accel_bias_m_s2 = bias;
+    s.table_lag_s = lag_s;
+    let out = go(&s, Mode::Predict);
+    let e = &out.report.estimator;
+    let found = e.identified.accel_bias_m_s2[0];
+    let within = if name == "El Centro" && bias[0] != 0.0 {
+        0.0315
+    } else {
+        4e-3
+    };
+    let r = e.rms_err_pct_of_peak;
+    eprintln!("{name} {bias:?} lag {lag_s} s: table offset {found}, {r} % RMS");
+    assert!(
+        (found - bias[0]).abs() < within,
+        "{name} {bias:?} lag {lag_s} s: found {found}"
+    );
+    assert_eq!(out.report.detection.missed, 0, "{name} lag {lag_s} s");
+    assert_eq!(out.report.detection.false_, 0, "{name} lag {lag_s} s");
+    r
+}
+
+/// Predict mode without a rest on a table that follows its plan late (`[input] table_lag_s`, the
+/// truth's alone: a servo table's lag), 0.1 to 20 ms, on the first 2 s of the default scene and
+/// of El Centro, with and without every accelerometer 0.05 g off. The table start allows for
+/// any lag (`ssvr_proto::table_start`): no offset is taken for a lagging table that reads its own
+/// rest (taking the intercept less the plan's, as before, a lag of 0.2–1 ms read as an offset
+/// of up to the plan's rise per sample times the lag, and El Centro's first acceleration for one:
+/// 0.22–0.73 % RMS over its 32 s without any offset), and 0.05 g is found within 4e-3 m/s² (the
+/// default scene) or half El Centro's first acceleration. Bounds: the measured RMS (printed)
+/// and a few % over it.
+#[test]
+fn predict_allows_for_the_tables_lag() {
+    let g = 0.05 * 9.80665;
+    for (name, base) in [
+        ("default", scene([0.0; 3], 0.0, 0.0)),
+        ("El Centro", elcentro_2s()),
+    ] {
+        for bias in [[0.0; 3], [g, -g, g]] {
+            let mut worst = 0.0f64;
+            for lag_ms in [0.1, 0.2, 0.5, 1.0, 2.0, 5.0, 20.0] {
+                worst = worst.max(predict_table_start(name, &base, bias, lag_ms * 1e-3));
+            }
+            // (Measured worst: 0.033 / 0.170 (0.2 ms) / 0.028 / 1.268 (20 ms) % RMS.)
+            let bound = match (name, bias[0] == 0.0) {
+                ("default", true) => 0.035,
+                ("default", false) => 0.18,
+                (_, true) => 0.03,
+                _ => 1.3,
+            };
+            assert!(worst < bound, "{name} {bias:?}: {worst} % RMS");
         }
     }
 }

@@ -111,16 +111,17 @@ fn check_common(v: &Value, samples: u64) {
     assert!(num(v, "reversals") >= 1.0);
     assert!(num(v, "flash_bytes") > 0.0 && num(v, "ram_bytes") > 0.0);
     assert!(num(v, "board_flash_bytes") <= num(&v["goals"], "board_flash_budget_bytes"));
-    // Measured 85 448 B (stick-slip, fuse, Coulomb, with the offsets' identification from the
+    // Measured 88 840 B (stick-slip, fuse, Coulomb, with the offsets' identification from the
     // sliding phases and the open-loop starts (the top's, and predict mode's table start against
     // the plan with its state correction: +2.0 KB), the table's gain against the displacement, the
     // top's gain from the stuck phases, f and ξ from the input's start, the first slides'
     // friction from the slip starts and the M of either mode: 51 172 B without them; +1.5 KB in
     // the eleventh session for speed: the open-loop start's runs apart from the steady ones, the
-    // least squares' rows written out; the velocity-dependent law is compiled in only for a
-    // scene with one); the budget is 96 KiB, bounded here a little above the measured size so
-    // that a regression fails.
-    assert!(num(v, "board_flash_bytes") <= 84.0 * 1024.0);
+    // least squares' rows written out; +3.4 KB in the twelfth for predict mode's table start
+    // allowing for the table's lag, once per run in f64; the velocity-dependent law is compiled
+    // in only for a scene with one); the budget is 96 KiB, bounded here a little above the
+    // measured size so that a regression fails.
+    assert!(num(v, "board_flash_bytes") <= 87.5 * 1024.0);
     assert!(num(v, "board_ram_bytes") <= 8.0 * 1024.0);
     // The model as the pipeline runs it, all identification on, against the budget of
     // 50 instructions per steady sample (reported, not met by the stick-slip and fixed-base
@@ -338,7 +339,9 @@ fn qemu_command_fuse_mode_takes_m_with_m1_told_5_percent_high() {
 /// 2 s of El Centro: the table's offset from the input's start against the plan (the plan's
 /// planned start reaches the image through `SSVR_PLANNED_START`: the same digest as the host's),
 /// and the firmware is the host bit for bit; the f64 reference (its own table start) measured
-/// 9.8e-7 gμ (`check_common`: frames, digest, μ).
+/// 3.2e-6 gμ (9.8e-7 before the start allowed for the table's lag: El Centro's first
+/// acceleration now leaves the offset a0/2 off, and the stuck 2 s carry it; `check_common`:
+/// frames, digest, μ).
 #[test]
 fn qemu_command_predict_mode_finds_the_table_offset_at_the_start() {
     if !qemu_tests_run() {
@@ -356,7 +359,7 @@ fn qemu_command_predict_mode_finds_the_table_offset_at_the_start() {
     let v = run_json_mode(&scene, Some("stick-slip"), Some("predict"));
     check_common(&v, 20_000);
     assert_eq!(v["model"], "stick-slip");
-    assert!(num(&v, "max_err_vs_reference_gmu") < 1.5e-6, "{v}");
+    assert!(num(&v, "max_err_vs_reference_gmu") < 4e-6, "{v}");
 }
 
 #[test]

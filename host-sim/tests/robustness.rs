@@ -63,13 +63,17 @@ fn the_quick_scorecard() {
 
 /// The goals' range (issue 13: a prior off by up to f ±8 %, ξ ×2 or ×0.5, μ ±25 %, m1 ±5 %;
 /// offsets up to 0.05 g; gains ±1 %; 1 % dropped frames): every perturbation of the scorecard
-/// is within it but the top accelerometer's gain 2 % high, a stress row shown and not counted.
+/// is within it but the top accelerometer's gain 2 % high, a stress row, and a table 2 ms late
+/// on its plan (not one of the issue's perturbations), shown and not counted.
 #[test]
-fn only_the_top_gain_of_2_percent_is_beyond_the_goals_range() {
+fn only_the_top_gain_of_2_percent_and_the_tables_lag_are_beyond_the_goals_range() {
     let beyond: Vec<&str> = host_sim::report::robustness::perturbations()
         .iter()
         .filter(|p| !p.in_goal_range())
         .map(|p| p.id)
         .collect();
-    assert_eq!(beyond, ["top_gain+2%"]);
+    assert_eq!(
+        beyond,
+        ["top_gain+2%", "table_lag_2ms", "all_offsets_0.05g_lag_2ms"]
+    );
 }

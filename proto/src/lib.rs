@@ -39,6 +39,7 @@ pub mod plan;
 pub mod planned_start;
 pub mod stream;
 pub mod table_gain;
+pub mod table_start;
 pub mod zeroing;
 
 pub use channel::{Channel, CHANNELS};

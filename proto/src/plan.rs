@@ -7,7 +7,7 @@
 //! the plan it expects.
 
 use crate::model::{Mode, ModelKind};
-pub use crate::planned_start::{line, planned_start, PlannedStart};
+pub use crate::planned_start::{planned_start, PlannedStart};
 use ssvr_core::detect::acceleration::PhaseDetectorConfig;
 use ssvr_core::detect::displacement::DetectorConfig;
 use ssvr_core::recursion::Estimator32;

@@ -7,6 +7,7 @@
 
 use crate::model::open_start_samples;
 use crate::plan::PlanError;
+use crate::table_start::LineFit;
 use ssvr_core::StructureParams;
 
 /// The least-squares line through the planned table acceleration over the open-loop start's
@@ -71,28 +72,10 @@ pub fn planned_start(
         let (k, y) = (k as f64, accel(k as f64 / rate));
         (s, sk, skk, sy, sky) = (s + 1.0, sk + k, skk + k * k, sy + y, sky + k * y);
     }
-    let (a, rise, _) = line([s, sk, skk, sy, sky])?;
+    let line = LineFit::new([s, sk, skk, sy, sky])?;
     let p = PlannedStart {
-        accel_m_s2: a as f32,
-        rise_per_sample_m_s2: rise as f32,
+        accel_m_s2: line.intercept as f32,
+        rise_per_sample_m_s2: line.slope as f32,
     };
     (p.accel_m_s2.is_finite() && p.rise_per_sample_m_s2.is_finite()).then_some(p)
-}
-
-/// The least-squares line y = a + r·k through samples given by their sums
-/// `[n, Σk, Σk², Σy, Σk·y]`: (a, r, and a's standard deviation per unit noise of one sample,
-/// √(Σk²/det)); `None` when the sums are degenerate (fewer than two distinct k). The planned
-/// start and predict mode's table start (`BaseTuning::note_table_start`) both use it, so the
-/// measured and the planned lines are the same fit.
-pub fn line(sums: [f64; 5]) -> Option<(f64, f64, f64)> {
-    let [n, sk, skk, sy, sky] = sums;
-    let det = n * skk - sk * sk;
-    if det.is_nan() || det <= 0.0 {
-        return None;
-    }
-    Some((
-        (skk * sy - sk * sky) / det,
-        (n * sky - sk * sy) / det,
-        libm::sqrt(skk / det),
-    ))
 }

@@ -17,7 +17,7 @@ mod tuning;
 
 pub use base_tuning::{
     open_start_samples, BaseSlot, BaseTuning, SlipStart, MAX_TABLE_START_OFFSET, MIN_OPEN_START,
-    OPEN_START_RAD, PLAN_LAG_SAMPLES, PREDICT_BREAKAWAY_WEIGHT,
+    OPEN_START_RAD, PREDICT_BREAKAWAY_WEIGHT,
 };
 pub use friction::{FrictionReport, FrictionSlot, SlipFriction};
 pub use rectangular::RectangularModel;

@@ -52,9 +52,7 @@ mod top;
 
 pub use slot::BaseSlot;
 use top::OpenStart;
-pub use top::{
-    open_start_samples, MAX_TABLE_START_OFFSET, MIN_OPEN_START, OPEN_START_RAD, PLAN_LAG_SAMPLES,
-};
+pub use top::{open_start_samples, MAX_TABLE_START_OFFSET, MIN_OPEN_START, OPEN_START_RAD};
 
 /// Most blocks that wait for late events before they are used: as many as cover the detector's
 /// longest reporting delay (the plan's `max_age`) and [`GUARD`], plus one, up to this many (at

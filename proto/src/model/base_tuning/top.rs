@@ -5,6 +5,7 @@
 //! ([`BaseTuning::note_table_start`]).
 
 use super::{BaseTuning, MAX_GAIN_ERROR};
+use crate::table_start::{start_offset, LineFit, MeasuredStart};
 use ssvr_core::oscillator_id::GainEstimate;
 use ssvr_core::sliding_id::SlidingEstimate;
 use ssvr_core::StructureParams;
@@ -206,27 +207,33 @@ impl OpenStart {
     }
 
     /// Predict mode's table start: the table accelerometer's offset and its standard
-    /// deviation, the intercept at the input's first sample of the least-squares line through
-    /// the measured table acceleration less the `planned` one's (the same line through the
-    /// planned input: a record's first acceleration, and the line's miss of a sine's start,
-    /// cancel). Its σ is the noise's, with in quadrature what a lag of [`PLAN_LAG_SAMPLES`]
-    /// between the plan and the table moves the intercept by (the planned `rise` per sample
-    /// times it); taken when 3σ from 0 and at most [`MAX_TABLE_START_OFFSET`]. A missing
-    /// sample leaves the measured line through the others: the planned input's curvature over
-    /// 0.1 rad then moves it by far less than the noise.
+    /// deviation from the least-squares line through the measured table acceleration against
+    /// the `planned` line (its value at the input's first sample and its `rise` per sample: the
+    /// same fit through the planned input, so a record's first acceleration and the line's miss
+    /// of a sine's start cancel), for a table that follows the plan any lag late
+    /// ([`start_offset`]); taken when 3σ from 0 and at most [`MAX_TABLE_START_OFFSET`]. A
+    /// missing sample leaves the measured line through the others: the planned input's
+    /// curvature over 0.1 rad then moves it by far less than the noise.
     fn line_offset(&self, planned: f64, rise: f64) -> Option<(f64, f64)> {
         if self.n < MIN_OPEN_START {
             return None;
         }
-        let (a, _, per_noise) = crate::plan::line([
+        let measured = LineFit::new([
             self.n as f64,
             self.sum_k as f64,
             self.sum_k2 as f64,
             self.sum as f64,
             self.sum_kr as f64,
         ])?;
-        let b = a - planned;
-        let sd = libm::hypot(self.noise(true)? * per_noise, rise * PLAN_LAG_SAMPLES);
+        let first_n = (self.len - self.half) as f64;
+        let start = MeasuredStart {
+            line: measured,
+            first_mean: self.sum_first as f64 / self.n_first as f64,
+            first_n,
+            n: self.len as f64,
+            noise: self.noise(true)?,
+        };
+        let (b, sd) = start_offset(&start, planned, rise)?;
         (sd > 0.0 && libm::fabs(b) > 3.0 * sd && libm::fabs(b) <= MAX_TABLE_START_OFFSET)
             .then_some((b, sd))
     }
@@ -244,15 +251,6 @@ pub fn open_start_samples(params: &StructureParams, rate: f64) -> u32 {
         0
     }
 }
-
-/// The lag between the planned input and the table that predict mode's table start allows for
-/// (samples): the table is taken to follow its plan within a sample. A lag τ moves the measured
-/// line's intercept by the planned rise over τ (on the default scene's sine, 8.8e-3 m/s² per
-/// sample at 10 kHz, 4.3 times the intercept's σ from the noise, 2.1e-3 m/s² at 5e-3 m/s²):
-/// one sample's worth is in the start's σ, so such a
-/// lag is not taken for an offset, and offsets of 0.03 m/s² and more are found. A servo table's
-/// lag of milliseconds would need the plan to be the table's expected response.
-pub const PLAN_LAG_SAMPLES: f64 = 1.0;
 
 /// Largest table offset predict mode's table start takes (m/s²): 0.1 g, twice the largest a lab
 /// accelerometer is expected to show (a table that does not follow the plan at its start is
@@ -485,26 +483,29 @@ mod tests {
         assert_eq!((b.top_offset(), b.top_offset_std_use), (0.0, 0.0));
     }
 
-    /// Predict mode's table start (no rest, a planned start): the measured table's line less
-    /// the plan's, in runs of any length (a missing sample skipped). An offset of ±0.05 m/s²
-    /// under 5e-3 m/s² of noise on a gentle planned ramp from 0.06 m/s² comes out within 2σ (σ
-    /// of the intercept from 22 samples: 0.41 × the noise) and is taken with that σ, the fits
-    /// from one direction of sliding then told it is known; none without one (3σ), beyond
-    /// 0.1 g, or without a plan (no start). On a steep ramp (the default scene's sine: 8.8e-3
-    /// m/s² per sample) a lag of a sample is in σ: 0.02 m/s² is not taken, 0.05 m/s² is.
+    /// Predict mode's table start (no rest, a planned start): the measured table's line against
+    /// the plan's, for a table any lag late ([`start_offset`]), in runs of any length (a missing
+    /// sample skipped). On a ramp from 0 (the default scene's sine: 8.8e-3 m/s² per sample) an
+    /// offset of ±0.1 m/s² under 5e-3 m/s² of noise comes out within 2σ, σ 0.4–1.6 times the
+    /// noise (a lag of a sample or two is barely seen in the slope and moves the intercept by
+    /// the rise), and is taken with that σ, the fits from one direction of sliding then told it
+    /// is known; none without one (3σ), beyond 0.1 g, or without a plan (no start). On a
+    /// gentle ramp from 0.06 m/s² (a record's first acceleration) a table that follows at once
+    /// and one still at rest are 0.06 apart: the midpoint, 3σ ≥ 0.03; 0.5 m/s² is taken, −0.03
+    /// is not (a table at rest reads +0.03, one that follows at once −0.03).
     #[test]
     fn the_table_start_gives_the_table_offset() {
-        let start = |rise: f32, offset: f32| {
+        let start = |a0: f32, rise: f32, offset: f32| {
             let mut b = BaseTuning::new(params(), 10_000.0, false, false, 37)
                 .unwrap()
                 .with_planned_start(Some(crate::PlannedStart {
-                    accel_m_s2: 0.06,
+                    accel_m_s2: a0,
                     rise_per_sample_m_s2: rise,
                 }));
             let n = b.open_start();
             assert_eq!(n, 22);
             let mut table: [f32; 40] =
-                core::array::from_fn(|k| 0.06 + rise * k as f32 + offset + noise(k as u32, 5e-3));
+                core::array::from_fn(|k| a0 + rise * k as f32 + offset + noise(k as u32, 5e-3));
             table[5] = f32::NAN;
             // Samples after the start: never read.
             table[n..].iter_mut().for_each(|m| *m = 1e3);
@@ -519,14 +520,14 @@ mod tests {
             assert_eq!(b.open_start(), 0);
             (b, taken)
         };
-        for offset in [0.05f32, -0.05, 0.0, 1.2] {
-            let (b, taken) = start(1e-4, offset);
+        for offset in [0.1f32, -0.1, 0.0, 1.2] {
+            let (b, taken) = start(0.0, 8.8e-3, offset);
             let (found, sd) = (b.offset(), b.offset_std_use);
             if offset == 0.0 || offset > 1.0 {
                 assert_eq!((found, sd, b.offset_known), (0.0, 0.0, false), "{offset}");
                 assert_eq!(taken, None);
             } else {
-                assert!(sd > 1.5e-3 && sd < 3e-3, "σ {sd}");
+                assert!(sd > 2e-3 && sd < 8e-3, "σ {sd}");
                 assert!(
                     (found - offset).abs() < 2.0 * sd as f32,
                     "{found} for {offset}"
@@ -536,10 +537,18 @@ mod tests {
                 assert_eq!(taken, Some((found, 21)));
             }
         }
-        let (steep, _) = start(8.8e-3, 0.02);
-        assert!(!steep.offset_known, "a lag-sized offset taken");
-        let (steep, _) = start(8.8e-3, 0.05);
-        assert!(steep.offset_known && steep.offset_std_use > 8e-3);
+        let (jump, _) = start(0.06, 1e-4, -0.03);
+        assert!(
+            !jump.offset_known,
+            "an offset within the plan's first acceleration taken"
+        );
+        let (jump, _) = start(0.06, 1e-4, 0.5);
+        assert!(jump.offset_known && jump.offset_std_use >= 0.01);
+        assert!(
+            (jump.offset() - 0.5).abs() < 0.03 + 5e-3,
+            "{}",
+            jump.offset()
+        );
         // No plan, or a rest: no start; fuse mode's start is the top's.
         let none = BaseTuning::new(params(), 10_000.0, false, false, 37).unwrap();
         assert_eq!(none.with_planned_start(None).open_start(), 0);
