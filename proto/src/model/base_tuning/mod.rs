@@ -266,6 +266,9 @@ impl BaseTuning {
                 let mut start = OpenStart::new(!zeroed, &params, rate);
                 if !fuse {
                     start.off();
+                    // (The table's statistics over its first samples only: every whole lag
+                    // of the table is tried over them, `table_start::LAGS`.)
+                    start.keep_first(crate::table_start::LAGS as u32 - 1);
                 }
                 start
             },

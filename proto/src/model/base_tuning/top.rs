@@ -53,22 +53,25 @@ pub const LEVEL_SIGMAS: f64 = 5.0;
 /// small response then, and the table's offset is left to the stuck-phase observer as before.
 /// A start that is not at rest shows a trend in the residual and gives no offset
 /// ([`LEVEL_SIGMAS`]). Predict mode without a rest runs the same start on the measured table
-/// acceleration, whose line's intercept less the planned input's is the table's offset
-/// ([`BaseTuning::note_table_start`]).
+/// acceleration against the planned input's line, for a table any lag late, gives the table's
+/// offset ([`BaseTuning::note_table_start`], [`crate::table_start`]).
 #[derive(Debug, Clone)]
 pub(super) struct OpenStart {
-    /// Samples of the start still to come (0: none, or done), and the index of its second
-    /// half's first; its length.
+    /// Samples of the start still to come (0: none, or done); its length.
     left: u32,
-    half: u32,
     len: u32,
+    /// The samples whose statistics are kept (the first `cap`: all for the top's start, at
+    /// most `table_start::LAGS − 1` for the table's), and the index of its second half's first.
+    cap: u32,
+    cap_half: u32,
     /// Σ r (r = measured − predicted; predict mode's table start: the measured table) and its
     /// count, over the start and its first half; Σ k, Σ k², Σ k·r (k: the sample's index in
-    /// the start) for the table's line.
+    /// the start) for the table's line, Σ k over the first half.
     sum: f32,
     n: u32,
     sum_first: f32,
     n_first: u32,
+    sum_k_first: f32,
     sum_k: f32,
     sum_k2: f32,
     sum_kr: f32,
@@ -91,12 +94,14 @@ impl OpenStart {
         };
         Self {
             left,
-            half: left / 2,
             len: left,
+            cap: left,
+            cap_half: left - left / 2,
             sum: 0.0,
             n: 0,
             sum_first: 0.0,
             n_first: 0,
+            sum_k_first: 0.0,
             sum_k: 0.0,
             sum_k2: 0.0,
             sum_kr: 0.0,
@@ -105,6 +110,14 @@ impl OpenStart {
             n_d: 0,
             last: f32::NAN,
         }
+    }
+
+    /// Keep the statistics of the start's first `max` samples only (the table's start: its
+    /// lag is tried whole sample by whole sample over them; a table later than them is at rest
+    /// there, reading its offset). The start itself, the model's open loop, keeps its length.
+    pub(super) fn keep_first(&mut self, max: u32) {
+        self.cap = self.len.min(max);
+        self.cap_half = self.cap - self.cap / 2;
     }
 
     /// No start (none to come; [`Self::arm`] brings it back before its first sample).
@@ -145,18 +158,20 @@ impl OpenStart {
             if self.left == 0 {
                 break;
             }
-            if r.is_finite() {
+            let at = self.len - self.left;
+            if r.is_finite() && at < self.cap {
                 if self.last.is_finite() {
                     let d = r - self.last;
                     (self.sum_d, self.sum_d2, self.n_d) =
                         (self.sum_d + d, self.sum_d2 + d * d, self.n_d + 1);
                 }
-                let k = (self.len - self.left) as f32;
+                let k = at as f32;
                 (self.sum, self.n) = (self.sum + r, self.n + 1);
                 (self.sum_k, self.sum_k2, self.sum_kr) =
                     (self.sum_k + k, self.sum_k2 + k * k, self.sum_kr + k * r);
-                if self.left > self.half {
-                    (self.sum_first, self.n_first) = (self.sum_first + r, self.n_first + 1);
+                if at < self.cap_half {
+                    (self.sum_first, self.n_first, self.sum_k_first) =
+                        (self.sum_first + r, self.n_first + 1, self.sum_k_first + k);
                 }
             }
             self.last = r;
@@ -225,12 +240,12 @@ impl OpenStart {
             self.sum as f64,
             self.sum_kr as f64,
         ])?;
-        let first_n = (self.len - self.half) as f64;
         let start = MeasuredStart {
             line: measured,
             first_mean: self.sum_first as f64 / self.n_first as f64,
-            first_n,
-            n: self.len as f64,
+            first_mean_k: self.sum_k_first as f64 / self.n_first as f64,
+            first_n: self.cap_half as f64,
+            n: self.cap as f64,
             noise: self.noise(true)?,
         };
         let (b, sd) = start_offset(&start, planned, rise)?;
@@ -495,7 +510,7 @@ mod tests {
     /// is not (a table at rest reads +0.03, one that follows at once −0.03).
     #[test]
     fn the_table_start_gives_the_table_offset() {
-        let start = |a0: f32, rise: f32, offset: f32| {
+        let start_without = |a0: f32, rise: f32, offset: f32, missing: usize| {
             let mut b = BaseTuning::new(params(), 10_000.0, false, false, 37)
                 .unwrap()
                 .with_planned_start(Some(crate::PlannedStart {
@@ -506,7 +521,7 @@ mod tests {
             assert_eq!(n, 22);
             let mut table: [f32; 40] =
                 core::array::from_fn(|k| a0 + rise * k as f32 + offset + noise(k as u32, 5e-3));
-            table[5] = f32::NAN;
+            table[missing] = f32::NAN;
             // Samples after the start: never read.
             table[n..].iter_mut().for_each(|m| *m = 1e3);
             let (mut at, mut taken) = (0, None);
@@ -520,6 +535,7 @@ mod tests {
             assert_eq!(b.open_start(), 0);
             (b, taken)
         };
+        let start = |a0: f32, rise: f32, offset: f32| start_without(a0, rise, offset, 5);
         for offset in [0.1f32, -0.1, 0.0, 1.2] {
             let (b, taken) = start(0.0, 8.8e-3, offset);
             let (found, sd) = (b.offset(), b.offset_std_use);
@@ -536,6 +552,18 @@ mod tests {
                 // (The model integrated it over the start's 21 intervals.)
                 assert_eq!(taken, Some((found, 21)));
             }
+        }
+        // A missing sample anywhere in the start (the first half's mean is compared with the
+        // line at its own mean index: when it was compared at the half's middle, a sample
+        // missing at 0, 1 or 10 lost the offset).
+        for missing in [0, 1, 10, 11, 21] {
+            let (b, _) = start_without(0.0, 8.8e-3, 0.1, missing);
+            let (found, sd) = (b.offset(), b.offset_std_use);
+            assert!(b.offset_known, "missing {missing}");
+            assert!(
+                (found - 0.1).abs() < 3.0 * sd as f32,
+                "missing {missing}: {found} ± {sd}"
+            );
         }
         let (jump, _) = start(0.06, 1e-4, -0.03);
         assert!(
