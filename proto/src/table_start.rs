@@ -53,20 +53,13 @@ pub const START_GAIN_SD: f64 = 0.01;
 /// no lag of the plan (the noise is itself estimated from the start's ~20 differences).
 pub const MAX_START_CHI2: f64 = 25.0;
 
-/// The least-squares line y = a + s·k through samples given by their sums, and the standard
-/// deviations (per unit noise of one sample) of its intercept and slope and their covariance.
+/// The least-squares line y = a + s·k through samples given by their sums.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LineFit {
     /// Intercept a (at k = 0).
     pub intercept: f64,
     /// Slope s (per sample).
     pub slope: f64,
-    /// σ of a per unit noise: √(Σk²/det).
-    pub intercept_sd: f64,
-    /// σ of s per unit noise: √(n/det).
-    pub slope_sd: f64,
-    /// cov(a, s) per unit noise²: −Σk/det.
-    pub cov: f64,
 }
 
 impl LineFit {
@@ -81,9 +74,6 @@ impl LineFit {
         Some(Self {
             intercept: (skk * sy - sk * sky) / det,
             slope: (n * sky - sk * sy) / det,
-            intercept_sd: libm::sqrt(skk / det),
-            slope_sd: libm::sqrt(n / det),
-            cov: -sk / det,
         })
     }
 }
