@@ -117,7 +117,7 @@ fn check_common(v: &Value, samples: u64) {
     // top's gain from the stuck phases, f and ξ from the input's start, the first slides'
     // friction from the slip starts and the M of either mode: 51 172 B without them; +1.5 KB in
     // the eleventh session for speed: the open-loop start's runs apart from the steady ones, the
-    // least squares' rows written out; +3.8 KB in the twelfth for predict mode's table start
+    // least squares' rows written out; +3.7 KB in the twelfth for predict mode's table start
     // allowing for the table's lag, once per run in f64; the velocity-dependent law is compiled
     // in only for a scene with one); the budget is 96 KiB, bounded here a little above the
     // measured size so that a regression fails.

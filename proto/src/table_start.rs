@@ -35,7 +35,7 @@
 //!   taken for a lagging table that reads its own rest (the old start took −a0: El Centro, a
 //!   1 ms lag, 0.73 % RMS over 32 s without any offset; 0.065 % now).
 //!
-//! All in f64, once, at the start's end (33 lags; ~3.8 KB of flash on the M4F).
+//! All in f64, once, at the start's end (33 lags; ~3.7 KB of flash on the M4F).
 
 /// Lags tried (samples): every whole lag over a start of at most `LAGS − 1` samples (a step in
 /// the plan shows by the whole sample it falls on), and beyond it (a table not yet moving). A
