@@ -54,6 +54,13 @@ fn run_json(scene: &Path, model: Option<&str>) -> Value {
 
 /// [`run_json`] with `--mode`.
 fn run_json_mode(scene: &Path, model: Option<&str>, mode: Option<&str>) -> Value {
+    let (ok, v) = run_json_status(scene, model, mode);
+    assert!(ok, "host-sim qemu failed");
+    v
+}
+
+/// The report, and whether the command succeeded (every goal it prints met).
+fn run_json_status(scene: &Path, model: Option<&str>, mode: Option<&str>) -> (bool, Value) {
     let mut args = vec!["qemu", scene.to_str().unwrap(), "--json"];
     if let Some(m) = model {
         args.extend(["--model", m]);
@@ -69,12 +76,7 @@ fn run_json_mode(scene: &Path, model: Option<&str>, mode: Option<&str>) -> Value
         .unwrap();
     let stdout = String::from_utf8_lossy(&out.stdout);
     eprintln!("{stdout}\n{}", String::from_utf8_lossy(&out.stderr));
-    assert!(
-        out.status.success(),
-        "host-sim qemu failed: {:?}",
-        out.status
-    );
-    serde_json::from_str(&stdout).unwrap()
+    (out.status.success(), serde_json::from_str(&stdout).unwrap())
 }
 
 fn num(v: &Value, key: &str) -> f64 {
@@ -111,17 +113,18 @@ fn check_common(v: &Value, samples: u64) {
     assert!(num(v, "reversals") >= 1.0);
     assert!(num(v, "flash_bytes") > 0.0 && num(v, "ram_bytes") > 0.0);
     assert!(num(v, "board_flash_bytes") <= num(&v["goals"], "board_flash_budget_bytes"));
-    // Measured 89 136 B (stick-slip, fuse, Coulomb, with the offsets' identification from the
+    // Measured 90 088 B (stick-slip, fuse, Coulomb, with the offsets' identification from the
     // sliding phases and the open-loop starts (the top's, and predict mode's table start against
     // the plan with its state correction: +2.0 KB), the table's gain against the displacement, the
     // top's gain from the stuck phases, f and ξ from the input's start, the first slides'
     // friction from the slip starts and the M of either mode: 51 172 B without them; +1.5 KB in
     // the eleventh session for speed: the open-loop start's runs apart from the steady ones, the
     // least squares' rows written out; +3.7 KB in the twelfth for predict mode's table start
-    // allowing for the table's lag, once per run in f64; the velocity-dependent law is compiled
+    // allowing for the table's lag, once per run in f64; +0.9 KB in the thirteenth for the top's
+    // curved start below ~4.4 kHz; the velocity-dependent law is compiled
     // in only for a scene with one); the budget is 96 KiB, bounded here a little above the
     // measured size so that a regression fails.
-    assert!(num(v, "board_flash_bytes") <= 87.5 * 1024.0);
+    assert!(num(v, "board_flash_bytes") <= 88.5 * 1024.0);
     assert!(num(v, "board_ram_bytes") <= 8.0 * 1024.0);
     // The model as the pipeline runs it, all identification on, against the budget of
     // 50 instructions per steady sample (reported, not met by the stick-slip and fixed-base
@@ -360,6 +363,45 @@ fn qemu_command_predict_mode_finds_the_table_offset_at_the_start() {
     check_common(&v, 20_000);
     assert_eq!(v["model"], "stick-slip");
     assert!(num(&v, "max_err_vs_reference_gmu") < 4e-6, "{v}");
+}
+
+/// At 1 kHz the open-loop start is 10 samples over 0.44 rad of p (the curved start: fuse mode
+/// fits the top's offset beside the model's response to the table's; predict mode's table start
+/// runs over the same 10 samples): `lab-offsets-no-rest.toml` (every accelerometer 0.05 g off,
+/// gains 1 % off, 1 % dropped frames, μ told 10 % high) at 1 kHz, 2 s, both modes. The firmware
+/// is the host bit for bit; the f64 reference measured 1.06e-6 gμ (fuse) and 6.0e-7
+/// (predict). Fuse mode misses the estimator's steady-sample goal of 40 at 1 kHz (116.8: the
+/// identifications' 500 Hz blocks come every other sample), the one goal the command may fail
+/// on here.
+#[test]
+fn qemu_command_runs_the_curved_start_at_1_khz() {
+    if !qemu_tests_run() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let scene = short_copy(dir.path(), "lab-offsets-no-rest.toml", 2.0);
+    let text = std::fs::read_to_string(&scene).unwrap();
+    assert!(text.contains("rate_hz = 10000.0"));
+    std::fs::write(
+        &scene,
+        text.replace("rate_hz = 10000.0", "rate_hz = 1000.0"),
+    )
+    .unwrap();
+    for (mode, bound) in [("fuse", 1.2e-6), ("predict", 7e-7)] {
+        let (ok, v) = run_json_status(&scene, Some("stick-slip"), Some(mode));
+        let g = &v["goals"];
+        assert_eq!(g["firmware_equals_host"], true, "{mode}: {v}");
+        assert_eq!(g["reference_error_le_goal"], true, "{mode}: {v}");
+        assert_eq!(g["plan_equals_host"], true, "{mode}: {v}");
+        assert!(
+            ok || g["instructions_per_sample_le_goal"] == false,
+            "{mode}: {v}"
+        );
+        assert_eq!(num(&v, "samples"), 2_000.0);
+        assert_eq!(num(&v, "max_err_vs_host_gmu"), 0.0);
+        assert_eq!(num(&v, "frame_mismatches"), 0.0);
+        assert!(num(&v, "max_err_vs_reference_gmu") < bound, "{mode}: {v}");
+    }
 }
 
 #[test]

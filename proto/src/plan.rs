@@ -590,16 +590,21 @@ mod tests {
         assert_eq!(n, 22);
         let bound = 2.0 * libm::pow(w * n as f64 / 10_000.0, 3.0) / 30.0;
         assert!((a as f64).abs() < 1.5 * bound, "{a} against {bound}");
-        // Only predict mode without a rest; no start at 2 kHz (fewer than 10 samples); none for
-        // a planned input that is not finite.
+        // Only predict mode without a rest; no start at 500 Hz (10 samples would span 0.88 rad
+        // of p), 10 samples at 2 kHz; none for a planned input that is not finite.
         let fuse = Plan::new(specimen(10_000.0), ModelKind::StickSlip).unwrap();
         assert_eq!(fuse.with_planned_input(|_| 1.0).planned_start, None);
         let rest = plan.with_rest(0.5);
         assert_eq!(rest.with_planned_input(|_| 1.0).planned_start, None);
-        let coarse = Plan::new(specimen(2_000.0), ModelKind::StickSlip)
-            .unwrap()
-            .with_mode(Mode::Predict);
-        assert_eq!(coarse.with_planned_input(|_| 1.0).planned_start, None);
+        let coarse = |rate| {
+            Plan::new(specimen(rate), ModelKind::StickSlip)
+                .unwrap()
+                .with_mode(Mode::Predict)
+                .with_planned_input(|_| 1.0)
+                .planned_start
+        };
+        assert_eq!(coarse(500.0), None);
+        assert!(coarse(2_000.0).is_some());
         assert_eq!(plan.with_planned_input(|_| f64::NAN).planned_start, None);
         assert_eq!(plan.with_planned_input(|_| 1e300).planned_start, None);
     }

@@ -26,6 +26,12 @@ pub const STUCK_GAIN_SIGMAS: f64 = 5.0;
 /// offset b_t has grown to b_t·(p·t)²/2 by its end, and its mean over the start to a sixth of
 /// that, ~1.7e-3·b_t.
 pub const OPEN_START_RAD: f64 = 0.1;
+/// The longest open-loop start in radians of the prior's p: where [`OPEN_START_RAD`] holds fewer
+/// than [`MIN_OPEN_START`] samples (below ~4.4 kHz at 7 Hz) but this holds them (from ~0.9 kHz
+/// on), the start is [`MIN_OPEN_START`] samples long, and the model's response to a table offset
+/// (up to b_t·(p·t)²/2 ≈ 0.1·b_t at 1 kHz) is fitted with the top's offset (`OpenStart`'s
+/// curved start).
+pub const MAX_OPEN_START_RAD: f64 = 0.5;
 
 /// Fewest samples of an open-loop start: with fewer, σ comes from a handful of differences and
 /// pure noise was taken for an offset (a scratch test: 21 % of starts at 1 kHz with 2 samples,
@@ -75,6 +81,13 @@ pub(super) struct OpenStart {
     sum_k: f32,
     sum_k2: f32,
     sum_kr: f32,
+    /// A curved start's (longer than [`OPEN_START_RAD`]; 0 for the others): (p/rate)²/2, the
+    /// model's response to a unit table offset at sample k being ~(p/rate)²/2·k²; Σ k⁴, Σ k²·r,
+    /// and Σ k² over the first half.
+    curve: f64,
+    sum_k4: f32,
+    sum_k2r: f32,
+    sum_k2_first: f32,
     /// Σ of the consecutive differences of r and of their squares (the noise, free of a
     /// smooth trend), their count, and the last r.
     sum_d: f32,
@@ -92,11 +105,17 @@ impl OpenStart {
         } else {
             0
         };
+        let theta = 2.0 * core::f64::consts::PI * params.natural_frequency_hz / rate;
+        let curved = left as f64 * theta > OPEN_START_RAD;
         Self {
             left,
             len: left,
             cap: left,
             cap_half: left - left / 2,
+            curve: if curved { theta * theta / 2.0 } else { 0.0 },
+            sum_k4: 0.0,
+            sum_k2r: 0.0,
+            sum_k2_first: 0.0,
             sum: 0.0,
             n: 0,
             sum_first: 0.0,
@@ -166,12 +185,15 @@ impl OpenStart {
                         (self.sum_d + d, self.sum_d2 + d * d, self.n_d + 1);
                 }
                 let k = at as f32;
+                let k2 = k * k;
                 (self.sum, self.n) = (self.sum + r, self.n + 1);
                 (self.sum_k, self.sum_k2, self.sum_kr) =
-                    (self.sum_k + k, self.sum_k2 + k * k, self.sum_kr + k * r);
+                    (self.sum_k + k, self.sum_k2 + k2, self.sum_kr + k * r);
+                (self.sum_k4, self.sum_k2r) = (self.sum_k4 + k2 * k2, self.sum_k2r + k2 * r);
                 if at < self.cap_half {
                     (self.sum_first, self.n_first, self.sum_k_first) =
                         (self.sum_first + r, self.n_first + 1, self.sum_k_first + k);
+                    self.sum_k2_first += k2;
                 }
             }
             self.last = r;
@@ -211,6 +233,9 @@ impl OpenStart {
             return None;
         }
         let noise = self.noise(false)?;
+        if self.curve > 0.0 {
+            return self.curved_offset(noise);
+        }
         let (m1, m2) = (
             self.sum_first as f64 / n1,
             (self.sum - self.sum_first) as f64 / n2,
@@ -219,6 +244,35 @@ impl OpenStart {
         let sd = noise / libm::sqrt(n);
         let level = libm::fabs(m1 - m2) <= LEVEL_SIGMAS * noise * libm::sqrt(1.0 / n1 + 1.0 / n2);
         (level && sd > 0.0 && libm::fabs(mean) > 3.0 * sd).then_some((mean, sd))
+    }
+
+    /// A curved start's offset (fuse mode below ~4.4 kHz at 7 Hz): over its
+    /// [`MIN_OPEN_START`] samples the model's response to the table accelerometer's offset b_t
+    /// has grown to ~0.1·b_t (at 1 kHz), so measured − predicted is b_top − b_t·c·k² (c the
+    /// start's `curve`) plus noise, and the least squares on 1 and k² give b_top, its σ
+    /// (√((X'X)⁻¹₀₀) × the noise, ~1.5 times a mean's) and b_t. Taken when 3σ from 0, the
+    /// residual's two halves level within [`LEVEL_SIGMAS`] (a specimen already moving) and b_t
+    /// within [`MAX_TABLE_START_OFFSET`] and 3 of its σ.
+    fn curved_offset(&self, noise: f64) -> Option<(f64, f64)> {
+        let (n, n1) = (self.n as f64, self.n_first as f64);
+        let n2 = n - n1;
+        let (s2, s4) = (self.sum_k2 as f64, self.sum_k4 as f64);
+        let (r, r2) = (self.sum as f64, self.sum_k2r as f64);
+        let det = n * s4 - s2 * s2;
+        if det.is_nan() || det <= 0.0 {
+            return None;
+        }
+        let b = (s4 * r - s2 * r2) / det;
+        let c = (n * r2 - s2 * r) / det;
+        let sd = noise * libm::sqrt(s4 / det);
+        let s2_first = self.sum_k2_first as f64;
+        let m1 = (self.sum_first as f64 - c * s2_first) / n1;
+        let m2 = ((self.sum - self.sum_first) as f64 - c * (s2 - s2_first)) / n2;
+        let level = libm::fabs(m1 - m2) <= LEVEL_SIGMAS * noise * libm::sqrt(1.0 / n1 + 1.0 / n2);
+        let table = -c / self.curve;
+        let table_sd = noise * libm::sqrt(n / det) / self.curve;
+        let plausible = libm::fabs(table) <= MAX_TABLE_START_OFFSET + 3.0 * table_sd;
+        (level && plausible && sd > 0.0 && libm::fabs(b) > 3.0 * sd).then_some((b, sd))
     }
 
     /// Predict mode's table start: the table accelerometer's offset and its standard
@@ -260,8 +314,11 @@ impl OpenStart {
 pub fn open_start_samples(params: &StructureParams, rate: f64) -> u32 {
     let p = 2.0 * core::f64::consts::PI * params.natural_frequency_hz;
     let n = libm::floor(OPEN_START_RAD * rate / p);
+    let coarse = libm::floor(MAX_OPEN_START_RAD * rate / p);
     if n.is_finite() && n >= MIN_OPEN_START as f64 {
         n.min(1e4) as u32
+    } else if coarse.is_finite() && coarse >= MIN_OPEN_START as f64 {
+        MIN_OPEN_START
     } else {
         0
     }
@@ -420,9 +477,9 @@ mod tests {
         (2.0 * u - 1.0) * 1.732_050_8 * rms
     }
 
-    /// The start's length is the first 0.1 rad of p (22 samples at 7 Hz and 10 kHz; none below
-    /// 10 samples); only fuse mode without a rest has one, and predict mode's with a planned
-    /// start.
+    /// The start's length is the first 0.1 rad of p (22 samples at 7 Hz and 10 kHz), at least 10
+    /// samples while they span at most 0.5 rad (from ~880 Hz on at 7 Hz), none below; only fuse
+    /// mode without a rest has one, and predict mode's with a planned start.
     #[test]
     fn the_open_starts_lengths() {
         let b = |zeroed, fuse, rate| {
@@ -430,9 +487,12 @@ mod tests {
                 .unwrap()
                 .open_start()
         };
-        // 0.1 × 10 000 / (2π·7) = 22.7; at 4 kHz 9.1, fewer than MIN_OPEN_START: none.
+        // 0.1 × 10 000 / (2π·7) = 22.7; at 4 kHz 9.1, fewer than MIN_OPEN_START: 10 (0.11 rad),
+        // at 1 kHz 10 (0.44 rad), at 850 Hz none (10 samples would span 0.52 rad).
         assert_eq!(b(false, true, 10_000.0), 22);
-        assert_eq!(b(false, true, 4_000.0), 0);
+        assert_eq!(b(false, true, 4_000.0), 10);
+        assert_eq!(b(false, true, 1_000.0), 10);
+        assert_eq!(b(false, true, 850.0), 0);
         assert_eq!(b(false, true, 200.0), 0);
         assert_eq!(b(true, true, 10_000.0), 0);
         assert_eq!(b(false, false, 10_000.0), 0);
@@ -446,7 +506,8 @@ mod tests {
                 .open_start()
         };
         assert_eq!(planned(false, 10_000.0), 22);
-        assert_eq!(planned(false, 4_000.0), 0);
+        assert_eq!(planned(false, 1_000.0), 10);
+        assert_eq!(planned(false, 850.0), 0);
         assert_eq!(planned(true, 10_000.0), 0);
     }
 
@@ -484,6 +545,55 @@ mod tests {
         }
     }
 
+    /// Below ~4.4 kHz (here 1 kHz) the start is 10 samples over 0.44 rad of p, and the model's
+    /// response to a table offset b_t, b_t·(1 − cos p·t), reaches ~0.1·b_t: measured −
+    /// predicted is b_top − b_t·(1 − cos p·t) (ξ's share left out: O(ξ·(p·t)³)). The curved
+    /// start's least squares on 1 and k² gives b_top within 3σ for b_t up to ±0.1 g (216 starts),
+    /// σ ≈ 0.46 × the noise (a mean's would be 0.32×); without a top offset nothing is taken
+    /// (measured: 0 of 72 starts; the momentum balance's later estimates decide, as at 10 kHz).
+    /// The mean alone, as at 10 kHz, is b_t·0.03 off and fails the halves' test for
+    /// b_t ≥ ~0.3 m/s²: no offset.
+    #[test]
+    fn a_curved_start_gives_the_top_offset_beside_the_tables() {
+        let rate = 1_000.0;
+        let theta = 2.0 * core::f32::consts::PI * 7.0 / rate as f32;
+        let (mut taken_at_zero, mut starts_at_zero) = (0, 0);
+        for seed in 0..12u32 {
+            for top in [0.49f32, -0.49, 0.1, 0.0] {
+                for table in [0.98f32, -0.98, 0.49, -0.2, 0.0, 0.05] {
+                    let mut b = BaseTuning::new(params(), rate, false, true, 37).unwrap();
+                    assert_eq!(b.open_start(), 10);
+                    let measured: [f32; 10] = core::array::from_fn(|k| {
+                        top - table * (1.0 - libm::cosf(theta * k as f32))
+                            + noise(k as u32 + 100 * seed, 5e-3)
+                    });
+                    b.note_open_start(&measured, &[0.0; 10]);
+                    assert_eq!(b.open_start(), 0);
+                    let (found, sd) = (b.top_offset(), b.top_offset_std_use);
+                    assert!(found.is_finite() && sd.is_finite());
+                    if top == 0.0 {
+                        starts_at_zero += 1;
+                        taken_at_zero += usize::from(found != 0.0);
+                        assert!(found.abs() < 0.015, "{found} for none, table {table}");
+                    } else {
+                        assert!(
+                            (found - top).abs() < 3.0 * sd as f32,
+                            "{found} ± {sd} for {top}, table {table}, seed {seed}"
+                        );
+                        // Measured: σ 1.4e-3 to 4.4e-3 (9 consecutive differences), within
+                        // −2.56σ and 1.29σ.
+                        assert!(sd > 1.2e-3 && sd < 5e-3, "σ {sd}");
+                    }
+                }
+            }
+        }
+        assert_eq!(starts_at_zero, 72);
+        assert!(
+            taken_at_zero <= 2,
+            "{taken_at_zero} of 72 taken without an offset"
+        );
+    }
+
     /// A start that is not at rest (a steady oscillation of 1 m/s² at 5.6 Hz that the model,
     /// starting at rest, does not know: the firmware benchmark's inputs) shows its motion's
     /// trend in the residual: no offset is taken from it, whatever its level.
@@ -494,6 +604,13 @@ mod tests {
         let measured: [f32; 22] =
             core::array::from_fn(|k| 0.05 + libm::sinf(w * k as f32 + 0.3) + noise(k as u32, 5e-3));
         b.note_open_start(&measured, &[0.0; 22]);
+        assert_eq!(b.open_start(), 0);
+        assert_eq!((b.top_offset(), b.top_offset_std_use), (0.0, 0.0)); // At 1 kHz (the curved start: 10 samples) too.
+        let mut b = BaseTuning::new(params(), 1_000.0, false, true, 37).unwrap();
+        let w = 2.0 * core::f32::consts::PI * 5.6 / 1_000.0;
+        let measured: [f32; 10] =
+            core::array::from_fn(|k| 0.05 + libm::sinf(w * k as f32 + 0.3) + noise(k as u32, 5e-3));
+        b.note_open_start(&measured, &[0.0; 10]);
         assert_eq!(b.open_start(), 0);
         assert_eq!((b.top_offset(), b.top_offset_std_use), (0.0, 0.0));
     }
