@@ -184,7 +184,18 @@ pub fn model_step(
 /// the base read in the table's units and the accelerometers divided by the table's gain
 /// identified against the displacement ([`ssvr_proto::pipeline::model_inputs`]). The f64
 /// reference of `host-sim qemu` reads its inputs through it.
-pub type InputTracker = Box<dyn FnMut(&mut [f32; ssvr_proto::CHANNELS], u8) -> Option<f32>>;
+pub type InputTracker = Box<dyn FnMut(&mut [f32; ssvr_proto::CHANNELS], u8) -> Tracked>;
+
+/// What [`InputTracker`] found at a sample besides the model's inputs: its detector's event's
+/// base step ([`EventDetector::event_step`]; NaN without an event) and a slip start's sliding
+/// side at its start (the pipeline notes both for the model).
+#[derive(Debug, Clone, Copy)]
+pub struct Tracked {
+    /// A slip start's sliding side at its start, in the model's units.
+    pub start_accel: Option<f32>,
+    /// The base accelerometer's step at the sample's event (m/s²).
+    pub event_step: f32,
+}
 
 /// [`InputTracker`] of a plan.
 pub fn input_tracker(plan: &Plan) -> Result<InputTracker> {
@@ -202,8 +213,13 @@ pub fn input_tracker(plan: &Plan) -> Result<InputTracker> {
             let inverse = gain
                 .as_ref()
                 .map_or(1.0, ssvr_proto::table_gain::TableGain::inverse);
-            matches!(event, Some(SlipEvent::SlipStart { .. }))
-                .then(|| slip_start_input(d.slip_start_accel(), tracked.1, inverse))
+            Tracked {
+                start_accel: matches!(event, Some(SlipEvent::SlipStart { .. }))
+                    .then(|| slip_start_input(d.slip_start_accel(), tracked.1, inverse)),
+                event_step: event.as_ref().map_or(f32::NAN, |e| {
+                    d.event_step(ssvr_proto::Event::from_detector(e).age_samples)
+                }),
+            }
         }))
     }
     macro_rules! rings {

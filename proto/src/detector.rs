@@ -85,6 +85,13 @@ pub trait EventDetector: Sized {
     fn slip_start_accel(&self) -> f32 {
         f32::NAN
     }
+    /// The step of the detector's input at an event `age` sample intervals before the last
+    /// sample processed (the base accelerometer's jump at a friction event; NaN when the
+    /// detector does not read the base accelerometer: the displacement's).
+    fn event_step(&self, age: f32) -> f32 {
+        let _ = age;
+        f32::NAN
+    }
 }
 
 impl<const N: usize> EventDetector for ReversalDetector<N> {
@@ -145,5 +152,9 @@ impl<const N: usize> EventDetector for PhaseDetector<N> {
 
     fn slip_start_accel(&self) -> f32 {
         PhaseDetector::slip_start_accel(self)
+    }
+
+    fn event_step(&self, age: f32) -> f32 {
+        PhaseDetector::step_at(self, age)
     }
 }

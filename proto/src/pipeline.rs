@@ -215,11 +215,18 @@ impl<M: Model, D: EventDetector, G: GainSlot> Pipeline<M, D, G> {
         // The slip starts' sliding sides, in order, for their pushes (a batch may hold two; a
         // third, were there one, would go without: the breakaway's μ instead).
         let (mut starts, mut noted) = ([f32::NAN; 2], 0usize);
+        // The base's step at each event, in order (the first few of a batch; a later one goes
+        // without: its identification blocks as sampled).
+        let (mut steps, mut stepped) = ([f32::NAN; 4], 0usize);
         for (s, fr) in samples.iter().zip(frames.iter_mut()).take(BATCH) {
             let channels;
             (*fr, channels) = self.detect(s);
             if let Some(e) = &fr.event {
                 events |= 1 << n;
+                if let Some(x) = steps.get_mut(stepped) {
+                    *x = self.detector.event_step(e.age_samples);
+                }
+                stepped += 1;
                 if e.kind == EventKind::SlipStart {
                     if let Some(a) = starts.get_mut(noted) {
                         *a = slip_start_input(
@@ -234,7 +241,7 @@ impl<M: Model, D: EventDetector, G: GainSlot> Pipeline<M, D, G> {
             self.model.note_inputs(n, &channels, fr.flags);
             n += 1;
         }
-        let (mut i, mut pushed) = (0, 0usize);
+        let (mut i, mut pushed, mut stepped) = (0, 0usize, 0usize);
         while i < n {
             if let Some(fr) = frames.get_mut(i) {
                 if let Some(e) = fr.event {
@@ -243,6 +250,9 @@ impl<M: Model, D: EventDetector, G: GainSlot> Pipeline<M, D, G> {
                         self.model.note_slip_start(a);
                         pushed += 1;
                     }
+                    self.model
+                        .note_event_step(steps.get(stepped).copied().unwrap_or(f32::NAN));
+                    stepped += 1;
                     fr.flags |= self.push(&e);
                 }
             }

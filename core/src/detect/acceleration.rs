@@ -279,6 +279,21 @@ impl<const N: usize> PhaseDetector<N> {
         self.start_accel
     }
 
+    /// The step of the slip acceleration (m/s²) at an event `age` sample intervals before the
+    /// last sample processed: the first sample at or after the event (k) less the one before,
+    /// less the step before that (the motion's slope), from the ring; NaN beyond it or for an
+    /// age not finite. The base accelerometer's jump at a friction event (the table's
+    /// acceleration is continuous), for [`crate::oscillator_id::OscillatorIdentifier::jump`].
+    pub fn step_at(&self, age: f32) -> f32 {
+        let back = libm::floorf(age);
+        if !(back >= 0.0 && back + 3.0 <= N as f32) || self.k < back as u64 + 3 {
+            return f32::NAN;
+        }
+        let k = self.k - 1 - back as u64;
+        let (at, before, earlier) = (self.at(k), self.at(k - 1), self.at(k - 2));
+        (at - before) - (before - earlier)
+    }
+
     /// The slip acceleration's offset it subtracts (m/s²): the base accelerometer's offset minus
     /// the table's, the mean of the first samples (the base at rest) and then tracked while the
     /// base sticks.
@@ -725,6 +740,30 @@ mod tests {
         assert!(max < 0.75, "max {max}");
         assert!(first < 0.1 && last < 0.1, "{first} {last}");
         assert!(last < 2.0 * first + 0.02, "{first} {last}");
+    }
+
+    /// `step_at`: a ramp of 0.01 m/s² per sample with a step of 2 m/s² at sample 500 (its
+    /// first sample after), read 0.4 sample ages later and 6 samples after it: the step, the
+    /// ramp's slope removed, to f32's rounding; NaN beyond the ring or for a NaN age.
+    #[test]
+    fn the_step_at_an_event() {
+        let cfg = PhaseDetectorConfig::for_noise(5e-3).unwrap();
+        let mut d = PhaseDetector::<64>::new(cfg).unwrap();
+        // (Offset-free from the start: the first samples, the offset's, are 0.)
+        for k in 0..506u32 {
+            let x = if k < 100 {
+                0.0
+            } else {
+                0.01 * (k - 100) as f32 + if k >= 500 { 2.0 } else { 0.0 }
+            };
+            d.process(x);
+        }
+        // The last sample is 505: sample 500 is 5 back, the event 5.4 sample intervals old.
+        let s = d.step_at(5.4);
+        assert!((s - 2.0).abs() < 1e-4, "{s}");
+        assert!(d.step_at(2.0).abs() < 1e-4);
+        assert!(d.step_at(62.0).is_nan() && d.step_at(f32::NAN).is_nan());
+        assert!(d.step_at(-1.0).is_nan());
     }
 
     #[test]

@@ -234,7 +234,8 @@ impl Reference {
             } => {
                 let mut channels = s.channels;
                 zeroing.apply(k as u32, &mut channels, f.flags);
-                if let Some(a) = inputs(&mut channels, f.flags) {
+                let tracked = inputs(&mut channels, f.flags);
+                if let Some(a) = tracked.start_accel {
                     *start_accel = a;
                 }
                 if let Some(e) = f.event.filter(|_| f.flags & flags::EVENT_PUSHED != 0) {
@@ -265,6 +266,10 @@ impl Reference {
                             est.set_friction(f64::from(mu));
                         }
                         b.event(phase, e.age_samples);
+                    }
+                    if let Some(t) = tuning.as_mut() {
+                        // (The base's jump at its time in the identifier's blocks.)
+                        t.jump(e.age_samples, tracked.event_step);
                     }
                     let age = e.age_samples.min(*max_age);
                     est.push_event(phase, f64::from(age)).map_err(|err| {

@@ -190,6 +190,12 @@ pub trait Model {
     fn note_slip_start(&mut self, slip_accel: f32) {
         let _ = slip_accel;
     }
+    /// The base accelerometer's step at the event about to be pushed (m/s², the detector's
+    /// [`EventDetector::event_step`](crate::EventDetector::event_step); NaN: unknown), for the
+    /// identification's blocks.
+    fn note_event_step(&mut self, step: f32) {
+        let _ = step;
+    }
     /// Predict `frames`, samples `from ..` of the batch: a run with no event after its first
     /// sample. Bit for bit the same as one sample at a time. It uses up the inputs noted for
     /// those samples (a model may work in place of them): each range is predicted once.
@@ -290,6 +296,9 @@ impl<M: Model + ?Sized> Model for std::boxed::Box<M> {
     }
     fn note_slip_start(&mut self, slip_accel: f32) {
         (**self).note_slip_start(slip_accel)
+    }
+    fn note_event_step(&mut self, step: f32) {
+        (**self).note_event_step(step)
     }
     fn predict_run(&mut self, frames: &mut [Frame], from: usize) {
         (**self).predict_run(frames, from)

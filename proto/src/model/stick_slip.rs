@@ -61,6 +61,8 @@ pub struct StickSlipModel<
     /// The slip acceleration on the sliding side of the slip start to push (the detector's,
     /// noted with its sample).
     start_accel: f32,
+    /// The base's step at the event about to be pushed (`Model::note_event_step`).
+    event_step: f32,
     /// Fuse mode: the breakaway coefficients read the measured top acceleration (else the
     /// model's own).
     fuse: bool,
@@ -106,6 +108,7 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
             fuse: true,
             breakaways: Breakaways::default(),
             start_accel: f32::NAN,
+            event_step: f32::NAN,
             friction: F::none(),
             base_tuning: B::none(),
         }
@@ -231,11 +234,19 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot> Model
         if let Some(b) = self.base_tuning.get_mut() {
             b.event(phase, e.age_samples);
         }
+        if let Some(t) = &mut self.tuning {
+            t.jump(e.age_samples, self.event_step);
+        }
+        self.event_step = f32::NAN;
         Ok(pushed)
     }
 
     fn note_slip_start(&mut self, slip_accel: f32) {
         self.start_accel = slip_accel;
+    }
+
+    fn note_event_step(&mut self, step: f32) {
+        self.event_step = step;
     }
 
     #[inline(always)]

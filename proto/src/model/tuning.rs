@@ -113,6 +113,15 @@ impl<G: GainRows<f32>> Tuning<G> {
         }
     }
 
+    /// A friction event `age` sample intervals before the next sample pushed, the base
+    /// accelerometer's `step` there: placed at its time in the identifier's block averages
+    /// ([`OscillatorIdentifier::jump`]). Not during the rest (no samples identified, no event).
+    pub fn jump(&mut self, age: f32, step: f32) {
+        if self.rest == 0 {
+            self.id.jump(age, step);
+        }
+    }
+
     /// [`Self::push_run`] while the rest lasts: its samples skipped.
     #[cold]
     #[inline(never)]
