@@ -305,7 +305,9 @@ impl<T: Real, G: GainRows<T>> OscillatorIdentifier<T, G> {
             return;
         }
         let blocks = (back - self.count - 1) / self.decimation + 1;
-        if blocks > JUMP_BLOCKS {
+        // (Not the first block, whose chains started from its own extrapolation, nor one
+        // before the identifier's first sample.)
+        if blocks > JUMP_BLOCKS || blocks >= self.started {
             return;
         }
         let mut v = [T::ZERO; N];

@@ -193,7 +193,7 @@ pub type InputTracker = Box<dyn FnMut(&mut [f32; ssvr_proto::CHANNELS], u8) -> T
 pub struct Tracked {
     /// A slip start's sliding side at its start, in the model's units.
     pub start_accel: Option<f32>,
-    /// The base accelerometer's step at the sample's event (m/s²).
+    /// The base accelerometer's step at the sample's event (m/s², in the model's units).
     pub event_step: f32,
 }
 
@@ -217,7 +217,8 @@ pub fn input_tracker(plan: &Plan) -> Result<InputTracker> {
                 start_accel: matches!(event, Some(SlipEvent::SlipStart { .. }))
                     .then(|| slip_start_input(d.slip_start_accel(), tracked.1, inverse)),
                 event_step: event.as_ref().map_or(f32::NAN, |e| {
-                    d.event_step(ssvr_proto::Event::from_detector(e).age_samples)
+                    let step = d.event_step(ssvr_proto::Event::from_detector(e).age_samples);
+                    slip_start_input(step, tracked.1, inverse)
                 }),
             }
         }))

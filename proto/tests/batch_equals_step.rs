@@ -182,6 +182,12 @@ fn compare_with<M: Model + FromPlan + Clone, D: EventDetector + Clone>(
     }
     assert_eq!(one.stats, batched.stats, "{model:?} counters");
     assert_eq!(one.offsets(), batched.offsets(), "{model:?} offsets");
+    // The identification too (the events' steps in its blocks: `OscillatorIdentifier::jump`).
+    assert_eq!(
+        ssvr_proto::pipeline::Step::oscillator(&one),
+        ssvr_proto::pipeline::Step::oscillator(&batched),
+        "{model:?} oscillator"
+    );
     assert!(events > 10, "{model:?}: only {events} events");
     assert!(one.stats.invalid > 0, "{model:?}: no invalid sample");
     if model != ModelKind::FixedBase {
