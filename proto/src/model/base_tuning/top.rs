@@ -352,6 +352,10 @@ pub fn open_start_samples(params: &StructureParams, rate: f64) -> u32 {
     }
 }
 
+/// The uncertainty of the table accelerometer's offset before any estimate of it (m/s²): 0.05 g,
+/// the largest the goals cover ([`BaseTuning::adopt_top`]).
+pub const UNKNOWN_TABLE_OFFSET_SD: f64 = 0.05 * 9.80665;
+
 /// Largest table offset predict mode's table start takes (m/s²): 0.1 g, twice the largest a lab
 /// accelerometer is expected to show (a table that does not follow the plan at its start is
 /// not taken for an offset beyond it).
@@ -434,7 +438,21 @@ impl BaseTuning {
             return;
         };
         let b = f.theta[2] + f.theta[0] * self.offset as f64;
-        let sd = libm::sqrt(libm::fmax(f.cov[2][2], 0.0));
+        // (The table's offset in use enters b through θ0 = −G·r: while it is not known, its
+        // uncertainty is that of any lab offset, and b's is at least |θ0| of it. On Table 2
+        // test 2, r = ½, a table 0.05 g off had the top's offset taken 0.245 m/s² off below
+        // 10 kHz, where the top's fit came before the table's.)
+        let table_sd = if self.offset_known || self.offset_std_use > 0.0 {
+            self.offset_std_use
+        } else if let Some(e) = e.filter(|e| e.offset_std.is_finite() && e.offset_std > 0.0) {
+            // (The sliding fit's estimate of it, and how far the 0 in use is from it.)
+            let off = e.offset + self.id_shift as f64 - self.offset as f64;
+            libm::fmin(libm::hypot(e.offset_std, off), UNKNOWN_TABLE_OFFSET_SD)
+        } else {
+            UNKNOWN_TABLE_OFFSET_SD
+        };
+        let var_b = f.cov[2][2] + f.theta[0] * f.theta[0] * table_sd * table_sd;
+        let sd = libm::sqrt(libm::fmax(var_b, 0.0));
         let change = libm::fabs(b - self.top_offset as f64);
         if sd > 0.0 && (change > 3.0 * sd || sd < 0.5 * self.top_offset_std_use) {
             self.top_offset = b as f32;
