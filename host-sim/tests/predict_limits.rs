@@ -127,7 +127,9 @@ fn pair_bound(a: f64, b: f64) -> (f64, f64, f64) {
     let (sa, sb) = (specimen(&s, a), specimen(&s, b));
     let (ta, tb) = (truth(&s, &sa), truth(&s, &sb));
     let t1 = first_slide(&s, &ta).min(first_slide(&s, &tb));
-    let peak = ta.peak_top_accel_m_s2().max(tb.peak_top_accel_m_s2());
+    let (pa, pb) = (ta.peak_top_accel_m_s2(), tb.peak_top_accel_m_s2());
+    assert!(pa.is_finite() && pb.is_finite(), "peaks {pa}, {pb}");
+    let peak = pa.max(pb);
     let by_truth = bound_pct(&s, &stuck_top(&s, &ta, t1), &stuck_top(&s, &tb, t1), peak);
     let table = s.table_motion();
     let (ra, rb) = (

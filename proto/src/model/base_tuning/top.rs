@@ -114,13 +114,14 @@ impl OpenStart {
         let curved = left as f64 * theta > OPEN_START_RAD;
         let xi = params.damping_ratio;
         let quad = theta * theta * (0.5 - 2.0 * xi * xi);
+        let curved = curved && quad > 0.0;
         Self {
             left,
             len: left,
             cap: left,
             cap_half: left - left / 2,
-            curve: if curved && quad > 0.0 { quad } else { 0.0 },
-            lin: 2.0 * xi * theta / quad,
+            curve: if curved { quad } else { 0.0 },
+            lin: if curved { 2.0 * xi * theta / quad } else { 0.0 },
             sum_k3: 0.0,
             sum_k4: 0.0,
             sum_r2: 0.0,
