@@ -113,7 +113,7 @@ fn check_common(v: &Value, samples: u64) {
     assert!(num(v, "reversals") >= 1.0);
     assert!(num(v, "flash_bytes") > 0.0 && num(v, "ram_bytes") > 0.0);
     assert!(num(v, "board_flash_bytes") <= num(&v["goals"], "board_flash_budget_bytes"));
-    // Measured 92 000 B (stick-slip, fuse, Coulomb, with the offsets' identification from the
+    // Measured 91 984 B (stick-slip, fuse, Coulomb, with the offsets' identification from the
     // sliding phases and the open-loop starts (the top's, and predict mode's table start against
     // the plan with its state correction: +2.0 KB), the table's gain against the displacement, the
     // top's gain from the stuck phases, f and ξ from the input's start, the first slides'
