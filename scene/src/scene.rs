@@ -120,6 +120,25 @@ impl Scene {
         })
     }
 
+    /// The scene sampled at `rate_hz` instead of its own rate: the same run, its sample count
+    /// round(duration_s · rate_hz), and the ADC's oversampling ratio the new rate's default
+    /// when the scene used the old one's (a scene's own `[adc] osr` is kept). `None` for a rate
+    /// that is not finite and positive, or that gives a sample count outside 1..=2^53.
+    /// (`host-sim robustness --rate-hz`: the scorecard at the board's own rate.)
+    pub fn at_rate(&self, rate_hz: f64) -> Option<Scene> {
+        let n = (self.duration_s * rate_hz).round();
+        if !(rate_hz.is_finite() && rate_hz > 0.0 && (1.0..=MAX_SAMPLES).contains(&n)) {
+            return None;
+        }
+        let mut s = self.clone();
+        if s.board.osr == BoardSettings::default_osr(self.rate_hz) {
+            s.board.osr = BoardSettings::default_osr(rate_hz);
+        }
+        s.rate_hz = rate_hz;
+        s.samples = n as u64;
+        Some(s)
+    }
+
     /// Time of sample k (s): k / rate_hz.
     pub fn time(&self, k: u64) -> f64 {
         k as f64 / self.rate_hz

@@ -193,6 +193,25 @@ fn default_osr_follows_the_rate() {
     assert_eq!(s.board.osr, 512);
 }
 
+/// `Scene::at_rate`: the same run at another rate, the default OSR following it, a scene's own
+/// OSR kept; no scene for a rate that is not finite and positive or gives no sample.
+#[test]
+fn a_scene_at_another_rate() {
+    let s = parse(&BASE.replace("rate_hz = 1000.0", "rate_hz = 10000")).unwrap();
+    assert_eq!((s.samples, s.board.osr), (10_000, 256));
+    let r = s.at_rate(1000.0).unwrap();
+    assert_eq!((r.rate_hz, r.samples, r.board.osr), (1000.0, 1000, 4096));
+    assert_eq!(
+        (r.duration_s, &r.input, &r.sensors),
+        (s.duration_s, &s.input, &s.sensors)
+    );
+    let own = parse(&format!("{BASE}[adc]\nosr = 128\n")).unwrap();
+    assert_eq!(own.at_rate(2000.0).unwrap().board.osr, 128);
+    for bad in [0.0, -1.0, f64::NAN, f64::INFINITY, 1e-6] {
+        assert!(s.at_rate(bad).is_none(), "{bad}");
+    }
+}
+
 #[test]
 fn bad_board_settings_are_named_with_their_line() {
     // BASE has 14 lines: `[adc]` is line 15, its first key line 16.

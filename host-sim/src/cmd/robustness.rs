@@ -1,11 +1,11 @@
-//! `host-sim robustness [--quick] [--json] [--out DIR]`: the robustness scorecard (the runs:
-//! [`crate::report::robustness`]).
+//! `host-sim robustness [--quick] [--json] [--out DIR] [--rate-hz HZ]`: the robustness
+//! scorecard (the runs: [`crate::report::robustness`]).
 
 use crate::plot::robustness::figure;
 use crate::report::robustness::{
     markdown, perturbations, quick_perturbations, scenes, scorecard, tally,
 };
-use anyhow::{Context, Result};
+use anyhow::{anyhow, Context, Result};
 use ssvr_proto::Mode;
 use std::io::IsTerminal;
 use std::path::PathBuf;
@@ -29,11 +29,28 @@ pub struct RobustnessArgs {
     /// Only this mode (`fuse` or `predict`).
     #[arg(long, value_parser = crate::model::parse_mode)]
     pub mode: Option<Mode>,
+    /// Every scene sampled at this rate (Hz) instead of its own (10 kHz): e.g. 1000, the
+    /// board's rate (`firmware/scenes/board.toml`).
+    #[arg(long)]
+    pub rate_hz: Option<f64>,
 }
 
 /// `host-sim robustness`.
 pub fn command(args: RobustnessArgs) -> Result<()> {
-    let scenes = scenes(args.quick)?;
+    let mut scenes = scenes(args.quick)?;
+    if let Some(rate) = args.rate_hz {
+        scenes = scenes
+            .iter()
+            .map(|s| {
+                s.at_rate(rate).ok_or_else(|| {
+                    anyhow!(
+                        "--rate-hz {rate}: expected a rate > 0 Hz giving {} at least one sample",
+                        s.name
+                    )
+                })
+            })
+            .collect::<Result<_>>()?;
+    }
     let (mut modes, mut perts) = if args.quick {
         (vec![Mode::Fuse], quick_perturbations())
     } else {

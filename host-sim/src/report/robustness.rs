@@ -199,6 +199,8 @@ impl Perturbation {
 pub struct Row {
     /// Scene name.
     pub scene: String,
+    /// The scene's sample rate (Hz; `--rate-hz` sets every scene's).
+    pub rate_hz: f64,
     /// `fuse` or `predict`.
     pub mode: &'static str,
     /// The perturbation's id.
@@ -293,6 +295,7 @@ pub fn scorecard(
             };
             Ok(Row {
                 scene: s.name.clone(),
+                rate_hz: s.rate_hz,
                 mode: mode.name(),
                 perturbation: p.id,
                 model: e.model,
@@ -336,13 +339,14 @@ pub fn scorecard(
 pub fn markdown(rows: &[Row]) -> String {
     use std::fmt::Write as _;
     let mut s = String::from(
-        "| scene | mode | perturbation | model | RMS % of peak | max % | events matched / missed / false | μ̂ | offsets removed (table, base, top; m/s²) | goal |\n|---|---|---|---|---:|---:|---|---:|---|---|\n",
+        "| scene | rate (Hz) | mode | perturbation | model | RMS % of peak | max % | events matched / missed / false | μ̂ | offsets removed (table, base, top; m/s²) | goal |\n|---|---:|---|---|---|---:|---:|---|---:|---|---|\n",
     );
     for r in rows {
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {} | {:.3} | {:.2} | {} / {} / {}{} | {} | {:.3}, {:.3}, {:.3} | {} |",
+            "| {} | {} | {} | {} | {} | {:.3} | {:.2} | {} / {} / {}{} | {} | {:.3}, {:.3}, {:.3} | {} |",
             r.scene,
+            r.rate_hz,
             r.mode,
             r.perturbation,
             r.model,
