@@ -122,10 +122,11 @@ fn check_common(v: &Value, samples: u64) {
     // least squares' rows written out; +3.7 KB in the twelfth for predict mode's table start
     // allowing for the table's lag, once per run in f64; +1.4 KB in the thirteenth for the top's
     // curved start below ~4.4 kHz and +1.7 KB for the events' steps in the oscillator
-    // identification; the velocity-dependent law is compiled
+    // identification; +2.1 KB in the fourteenth for missing samples at coarse rates: their
+    // indices kept, the jump test after a gap, the gap refilled; the velocity-dependent law is compiled
     // in only for a scene with one); the budget is 96 KiB, bounded here a little above the
     // measured size so that a regression fails.
-    assert!(num(v, "board_flash_bytes") <= 90.0 * 1024.0);
+    assert!(num(v, "board_flash_bytes") <= 92.5 * 1024.0);
     assert!(num(v, "board_ram_bytes") <= 8.0 * 1024.0);
     // The model as the pipeline runs it, all identification on, against the budget of
     // 50 instructions per steady sample (reported, not met by the stick-slip and fixed-base
@@ -370,8 +371,8 @@ fn qemu_command_predict_mode_finds_the_table_offset_at_the_start() {
 /// fits the top's offset beside the model's response to the table's; predict mode's table start
 /// runs over the same 10 samples): `lab-offsets-no-rest.toml` (every accelerometer 0.05 g off,
 /// gains 1 % off, 1 % dropped frames, μ told 10 % high) at 1 kHz, 2 s, both modes. The firmware
-/// is the host bit for bit; the f64 reference measured 1.08e-6 gμ (fuse) and 6.0e-7
-/// (predict). Fuse mode misses the estimator's steady-sample goal of 40 at 1 kHz (116.8: the
+/// is the host bit for bit; the f64 reference measured 1.59e-6 gμ (fuse; 1.08e-6 before the
+/// dropped frames' gaps were refilled) and 6.9e-7 (predict). Fuse mode misses the estimator's steady-sample goal of 40 at 1 kHz (116.8: the
 /// identifications' 500 Hz blocks come every other sample), the one goal the command may fail
 /// on here.
 #[test]
@@ -388,7 +389,7 @@ fn qemu_command_runs_the_curved_start_at_1_khz() {
         text.replace("rate_hz = 10000.0", "rate_hz = 1000.0"),
     )
     .unwrap();
-    for (mode, bound) in [("fuse", 1.2e-6), ("predict", 7e-7)] {
+    for (mode, bound) in [("fuse", 1.8e-6), ("predict", 8e-7)] {
         let (ok, v) = run_json_status(&scene, Some("stick-slip"), Some(mode));
         let g = &v["goals"];
         assert_eq!(g["firmware_equals_host"], true, "{mode}: {v}");

@@ -237,6 +237,11 @@ impl<M: Model, D: EventDetector, G: GainSlot> Pipeline<M, D, G> {
 
     /// Process a batch of samples (at most [`BATCH`], and at most `frames.len()`; the rest of
     /// `samples` is ignored) into `frames`. Returns the number of frames written. Never panics.
+    /// Batches that never straddle a multiple of [`BATCH`] samples from the run's start (the
+    /// board's whole batches; a replay's last partial one) give the frames of one sample at a
+    /// time bit for bit: the model's checks fall due at multiples of `BATCH` samples and are
+    /// made at a run's end (`proto/tests/batch_equals_step.rs`). A batch across such a multiple
+    /// makes a check due inside it at its end instead, and an adoption then starts later.
     pub fn step_batch(&mut self, samples: &[Sample], frames: &mut [Frame]) -> usize {
         let mut n = 0;
         let mut ev = BatchEvents::new();

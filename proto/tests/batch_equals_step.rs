@@ -150,17 +150,21 @@ fn compare_with<M: Model + FromPlan + Clone, D: EventDetector + Clone>(
         .collect();
     let single: Vec<Frame> = samples.iter().map(|s| one.step(s)).collect();
     let mut frames = Vec::new();
-    // Batches of varying length (1 ..= BATCH), as the QEMU replay's last partial batch.
+    // Batches of varying length (1 ..= BATCH) that never straddle a multiple of BATCH, the
+    // pipeline's contract (`Pipeline::step_batch`): 1 + 15, 2 + 14, ..., 8 + 8, 16, and the
+    // run's last partial one.
     let mut k = 0;
-    let mut len = 1;
+    let mut first = 1;
     while k < n {
-        let end = (k + len).min(n);
-        let mut out = [Frame::EMPTY; BATCH];
-        let got = batched.step_batch(&samples[k..end], &mut out);
-        assert_eq!(got, end - k);
-        frames.extend_from_slice(&out[..got]);
-        k = end;
-        len = len % BATCH + 1;
+        for len in [first, BATCH - first] {
+            let end = (k + len).min(n);
+            let mut out = [Frame::EMPTY; BATCH];
+            let got = batched.step_batch(&samples[k..end], &mut out);
+            assert_eq!(got, end - k);
+            frames.extend_from_slice(&out[..got]);
+            k = end;
+        }
+        first = first % BATCH + 1;
     }
     let mut events = 0;
     for (i, (a, b)) in single.iter().zip(&frames).enumerate() {

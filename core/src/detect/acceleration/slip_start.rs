@@ -4,7 +4,7 @@
 use super::super::ring::rel;
 use super::super::search::{golden_min, grid_min};
 use super::super::SlipEvent;
-use super::PhaseDetector;
+use super::{missing, PhaseDetector};
 
 /// Samples from the first one above the threshold that give a slip start's sliding side at its
 /// start ([`PhaseDetector::slip_start_accel`]): three, for the parabola through them (the
@@ -22,7 +22,8 @@ pub const START_PARABOLA_SAMPLES: f32 = 2.0;
 
 impl<const N: usize> PhaseDetector<N> {
     /// Time the slip start whose first sample above the threshold is `p`; the current sample is
-    /// `k`. Least squares over the samples lo..=k for the trial start t_b (relative to k).
+    /// `k`. Least squares over the measured samples lo..=k for the trial start t_b (relative
+    /// to k; a missing sample's fill continues the stuck samples, not the breakaway).
     pub(super) fn slip_start(&mut self, p: u64, k: u64) -> Option<SlipEvent> {
         self.pending = None;
         let s: i8 = if self.at(p) > 0.0 { 1 } else { -1 };
@@ -44,6 +45,9 @@ impl<const N: usize> PhaseDetector<N> {
             rel(lo, k)
         };
         let a = |i: u64| self.at(i);
+        // (The missing samples' fills continue the stuck samples, not the breakaway.)
+        let mask = self.missing_mask(k);
+        let measured = |i: u64| !missing(mask, k - i);
         let tb = if self.cfg.jump_breakaway {
             // s̈ = (J + S·u)·[u > 0], u = t − t_b: the residual is constant between samples, so
             // t_b is the middle of the best sample interval.
@@ -51,7 +55,7 @@ impl<const N: usize> PhaseDetector<N> {
                 let (mut n, mut su, mut suu, mut sa, mut sua) = (0.0f32, 0.0, 0.0, 0.0, 0.0);
                 for i in lo..=k {
                     let u = rel(i, k) - tb;
-                    if u > 0.0 {
+                    if u > 0.0 && measured(i) {
                         let y = a(i);
                         n += 1.0;
                         su += u;
@@ -77,7 +81,7 @@ impl<const N: usize> PhaseDetector<N> {
                 let (mut sgg, mut sga) = (0.0f32, 0.0f32);
                 for i in lo..=k {
                     let u = rel(i, k) - tb;
-                    if u > 0.0 {
+                    if u > 0.0 && measured(i) {
                         let g = if q == 1 { u } else { u * u };
                         sgg += g * g;
                         sga += g * a(i);
@@ -131,10 +135,23 @@ impl<const N: usize> PhaseDetector<N> {
     /// p.. ([`START_LINE_SAMPLES`] of them, up to k): the parabola through three when the first
     /// is within [`START_PARABOLA_SAMPLES`] of `tb` (the sliding oscillation's curvature: at
     /// 1 kHz a line took the slide's μ ~1 % low), else the least-squares line (the parabola's noise grows
-    /// with the distance: 10× the samples' at 2, 43× at 5); NaN with fewer than two.
+    /// with the distance: 10× the samples' at 2, 43× at 5); NaN with fewer than two. A missing
+    /// one (its fill continues the stuck samples) is left out: the line through the other two.
     fn start_line(&self, p: u64, k: u64, tb: f32) -> f32 {
         let end = k.min(p + START_LINE_SAMPLES - 1);
         let x0 = rel(p, k) - tb;
+        // (A missing sample among them: the line through the other two, if two.)
+        let span = (1u64 << (end.saturating_sub(p) + 1).min(START_LINE_SAMPLES)) - 1;
+        let gaps = (self.missing_mask(k) >> (k - end).min(63)) & span;
+        if gaps != 0 {
+            let mut two = (p..=end).filter(|&i| (gaps >> (end - i)) & 1 == 0);
+            let (Some(i), Some(j)) = (two.next(), two.next()) else {
+                return f32::NAN;
+            };
+            let (xi, xj) = (rel(i, k) - tb, rel(j, k) - tb);
+            let (ai, aj) = (self.at(i), self.at(j));
+            return ai - (aj - ai) * xi / (xj - xi);
+        }
         if end >= p + 2 && x0 < START_PARABOLA_SAMPLES {
             // Lagrange at 0 through x0, x0 + 1, x0 + 2 (times from the start).
             let (x1, x2) = (x0 + 1.0, x0 + 2.0);
