@@ -130,12 +130,15 @@ fn dropped_frames_at_the_boards_rate_change_no_event() {
     }
 }
 
-/// At 2 kHz the unperturbed fuse rows meet the fuse goals on every scene (RMS ≤ 0.3 %, max ≤
-/// 2 % of the peak): El Centro's jump breakaways (μs > μ) are confirmed at their third sample,
-/// not their fourth, and its max went 2.37 → 1.59 % (measured: default 0.069 / 0.53 %, El
-/// Centro 0.087 / 1.59 %, Table 2 test 2 0.042 / 0.17 %).
+/// At 2 kHz the fuse rows unperturbed and told f 5 % off meet the fuse goals on every scene
+/// (RMS ≤ 0.3 %, max ≤ 2 % of the peak). El Centro's jump breakaways (μs > μ) are confirmed at
+/// their third sample, not their fourth: its max went 2.37 → 1.59 %. The wide sliding observer
+/// is capped at 0.1 rad per sample there instead of off: f ± 5 % went from max 3.25 / 3.52 %
+/// (default) and 6.0 / 7.0 % (Table 2 test 2) to 1.37 / 1.28 % and 0.69 / 0.82 %. Measured RMS /
+/// max: default 0.069 / 0.53 %, f ± 5 % 0.141 / 1.37, 0.143 / 1.28; El Centro 0.087 / 1.59,
+/// 0.088 / 1.59 (both); Table 2 test 2 0.042 / 0.17, 0.063 / 0.69, 0.066 / 0.82.
 #[test]
-fn the_unperturbed_fuse_rows_meet_the_goals_at_2_khz() {
+fn the_fuse_rows_told_f_5_percent_off_meet_the_goals_at_2_khz() {
     let dir = tempfile::tempdir().unwrap();
     let out = Command::cargo_bin("host-sim")
         .unwrap()
@@ -145,7 +148,7 @@ fn the_unperturbed_fuse_rows_meet_the_goals_at_2_khz() {
             "--rate-hz",
             "2000",
             "--only",
-            "none",
+            "f+5,f-5",
             "--mode",
             "fuse",
             "--out",
@@ -160,13 +163,13 @@ fn the_unperturbed_fuse_rows_meet_the_goals_at_2_khz() {
     );
     let v: Value = serde_json::from_slice(&out.stdout).unwrap();
     let rows = v["rows"].as_array().unwrap();
-    assert_eq!(rows.len(), 3);
+    assert_eq!(rows.len(), 9, "3 scenes × (none, f+5%, f-5%)");
     for r in rows {
         let (rms, max) = (
             r["rms_pct_of_peak"].as_f64().unwrap(),
             r["max_pct_of_peak"].as_f64().unwrap(),
         );
-        assert!(rms <= 0.1 && max <= 1.75, "{r}");
+        assert!(rms <= 0.16 && max <= 1.75, "{r}");
         assert_eq!(r["goal_met"], true, "{r}");
         assert_eq!(
             (r["missed"].as_u64(), r["false_events"].as_u64()),

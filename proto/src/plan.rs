@@ -122,7 +122,7 @@ pub struct Plan {
 }
 
 /// Version of the word layout ([`Plan::to_words`]).
-pub const WORDS_VERSION: u32 = 6;
+pub const WORDS_VERSION: u32 = 7;
 /// Length of a plan's words.
 pub const WORDS: usize = 52 + COEFFICIENT_WORDS;
 
@@ -193,6 +193,7 @@ impl Plan {
             self.stick_slip.identify_mu = false;
             self.stick_slip.use_identified_mu = false;
             self.stick_slip.observer_bandwidth = 0.0;
+            self.stick_slip.cap_sliding_observer = false;
         }
         let planned = self.planned_start;
         self.with_planned_start(planned)
@@ -331,7 +332,8 @@ impl Plan {
         w.u32(c.min_blocks);
         w.u32(c.identify_every);
         w.f64(c.observer_bandwidth);
-        w.u32(c.sliding_observer as u32);
+        // (Bit 0: the sliding observer; bit 1: capped.)
+        w.u32(c.sliding_observer as u32 | (c.cap_sliding_observer as u32) << 1);
         let mut i = 0;
         while i < COEFFICIENT_WORDS {
             w.u32(self.coefficients[i]);
@@ -409,14 +411,18 @@ impl Plan {
         let max_age = r.usize();
         let history = r.usize();
         let storage = r.usize();
+        let (identify_mu, use_identified_mu) = (r.u32() != 0, r.u32() != 0);
+        let (forgetting, min_blocks, identify_every) = (r.f64(), r.u32(), r.u32());
+        let (observer_bandwidth, sliding) = (r.f64(), r.u32());
         let stick_slip = StickSlipConfig {
-            identify_mu: r.u32() != 0,
-            use_identified_mu: r.u32() != 0,
-            forgetting: r.f64(),
-            min_blocks: r.u32(),
-            identify_every: r.u32(),
-            observer_bandwidth: r.f64(),
-            sliding_observer: r.u32() != 0,
+            identify_mu,
+            use_identified_mu,
+            forgetting,
+            min_blocks,
+            identify_every,
+            observer_bandwidth,
+            sliding_observer: sliding & 1 != 0,
+            cap_sliding_observer: sliding & 2 != 0,
         };
         let mut coefficients = [0u32; COEFFICIENT_WORDS];
         let mut i = 0;

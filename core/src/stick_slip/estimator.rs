@@ -116,8 +116,9 @@ pub struct StickSlipEstimator<T: Real, M: Transcendentals<T>, const H: usize> {
 /// The sliding observer's gain and map, wide and narrow.
 pub(super) fn sliding_observers<T: Real, M: Transcendentals<T>>(
     c: &StickSlipCoefficients<T>,
-    on: bool,
+    cfg: &StickSlipConfig,
 ) -> [([T; 2], SlideMap<T>); 2] {
+    let on = (cfg.sliding_observer, cfg.cap_sliding_observer);
     [true, false].map(|wide| {
         let g = sliding_observer_gain::<T, M>(c, on, wide);
         (g, SlideMap::closed(c, g))
@@ -188,7 +189,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
             "observer bandwidth in [0, 10] × p",
         )?;
         let gain = observer_gain::<T, M>(&c, cfg.observer_bandwidth);
-        let slides = sliding_observers::<T, M>(&c, cfg.sliding_observer);
+        let slides = sliding_observers::<T, M>(&c, &cfg);
         let n = cfg.identify_every;
         let (block_phi, block_force) = block_maps(&c, n);
         let alpha = if n == 1 {

@@ -28,6 +28,11 @@ pub(super) fn observer_gain<T: Real, M: Transcendentals<T>>(
 /// observer.
 const SLIDE_BANDWIDTH_MAX_PER_SAMPLE: f64 = 0.1;
 
+/// Fastest sliding oscillator (its circular frequency p·√M per sample interval, rad) that gets
+/// a capped sliding observer ([`StickSlipConfig::cap_sliding_observer`](super::StickSlipConfig::cap_sliding_observer)), at most
+/// [`SLIDE_BANDWIDTH_MAX_PER_SAMPLE`] wide.
+const SLIDE_OSCILLATOR_MAX_PER_SAMPLE: f64 = 0.3;
+
 /// The sliding observer's bandwidth in units of p·√M before μ̂ is adopted (and, when held,
 /// f and ξ known: [`StickSlipEstimator::hold_wide`](super::StickSlipEstimator::hold_wide)): the error of a
 /// wrong prior's μ grows fast while sliding (measured on the robustness scorecard: μ told 25 %
@@ -45,7 +50,7 @@ pub(super) const SLIDE_NARROW: f64 = 2.0;
 /// ü1 = −(z0 + 2ξ·z1) (the spring and dashpot force on the top mass, in either phase).
 pub(super) fn sliding_observer_gain<T: Real, M: Transcendentals<T>>(
     c: &StickSlipCoefficients<T>,
-    on: bool,
+    (on, capped): (bool, bool),
     wide: bool,
 ) -> [T; 2] {
     if !on {
@@ -58,11 +63,24 @@ pub(super) fn sliding_observer_gain<T: Real, M: Transcendentals<T>>(
     // most SLIDE_BANDWIDTH_MAX_PER_SAMPLE per sample interval.
     let factor = if wide { SLIDE_WIDE } else { SLIDE_NARROW };
     let root_m = libm::sqrt(mp / p);
-    let bp_dt = factor * root_m * p * c.dt.to_f64();
+    let own_dt = root_m * p * c.dt.to_f64();
+    let bp_dt = factor * own_dt;
     // Only for a sliding oscillator that is underdamped (ζ√M < 1) and slow against the sample
     // rate: placing the poles of a stiff or overdamped one (a nearly massless base) needs huge
-    // gains; it then runs open loop, as before the sliding observer.
-    if !(bp_dt <= SLIDE_BANDWIDTH_MAX_PER_SAMPLE && 0.5 * c.two_xi.to_f64() * root_m < 1.0) {
+    // gains; it then runs open loop, as before the sliding observer. `capped`: a wide
+    // bandwidth beyond SLIDE_BANDWIDTH_MAX_PER_SAMPLE is capped there, for a sliding
+    // oscillator up to SLIDE_OSCILLATOR_MAX_PER_SAMPLE; else such a slide runs open loop too,
+    // and so does one with the narrow observer (the model known: capped, it let the noise and
+    // the gains' errors in).
+    let (slow, bp_dt) = if capped && wide {
+        (
+            own_dt <= SLIDE_OSCILLATOR_MAX_PER_SAMPLE,
+            bp_dt.min(SLIDE_BANDWIDTH_MAX_PER_SAMPLE),
+        )
+    } else {
+        (bp_dt <= SLIDE_BANDWIDTH_MAX_PER_SAMPLE, bp_dt)
+    };
+    if !(slow && 0.5 * c.two_xi.to_f64() * root_m < 1.0) {
         return [T::ZERO; 2];
     }
     gain_for(c, [ecp, p * es, -mp * es, ecm], bp_dt / (p * c.dt.to_f64()))

@@ -57,7 +57,7 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
         self.c = c;
         self.gain = observer_gain::<T, M>(&c, self.cfg.observer_bandwidth);
         self.closed = StuckMap::closed(&c, self.gain);
-        self.slides = sliding_observers::<T, M>(&c, self.cfg.sliding_observer);
+        self.slides = sliding_observers::<T, M>(&c, &self.cfg);
         self.open = StuckMap::open(&c);
         self.gmu = c.g * self.mu_use;
         self.set_drive();

@@ -40,6 +40,7 @@ use ssvr_core::Error;
 pub const STICK_SLIP_CONFIG: StickSlipConfig = StickSlipConfig {
     use_identified_mu: true,
     observer_bandwidth: 6.0,
+    cap_sliding_observer: true,
     ..StickSlipConfig::DEFAULT
 };
 
