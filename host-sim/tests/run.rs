@@ -492,16 +492,17 @@ fn stick_slip_scenes_prediction_and_friction() {
 fn stick_slip_hard_cases() {
     // (name, m2, ξ, rate, μs, accel noise, measured RMS %, bound %)
     let cases = [
-        ("undamped", 1.75, 0.0, 10_000.0, 0.2, 5e-3, 0.062, 0.2),
-        ("light base", 0.001, 0.05, 10_000.0, 0.2, 5e-3, 0.184, 0.3),
-        ("1 kHz, μs > μ", 1.75, 0.05, 1_000.0, 0.25, 5e-3, 0.74, 2.0),
+        ("undamped", 1.75, 0.0, 10_000.0, 0.2, 5e-3, 0.043, 0.2),
+        ("light base", 0.001, 0.05, 10_000.0, 0.2, 5e-3, 0.188, 0.3),
+        // (0.74 % before the strong jump breakaways were confirmed at their third sample.)
+        ("1 kHz, μs > μ", 1.75, 0.05, 1_000.0, 0.25, 5e-3, 0.502, 0.6),
         // Coarse sampling: the detector judges a jump of s̈ against its second and third
         // differences (with the second alone, a deceleration's zero crossing read as a
         // reversal: 18 / 6 / 1 events missed and as many invented at 500 / 700 / 800 Hz, 48 /
         // 34 / 14 % RMS).
-        ("800 Hz", 1.75, 0.05, 800.0, 0.2, 5e-3, 0.339, 0.4),
-        ("700 Hz", 1.75, 0.05, 700.0, 0.2, 5e-3, 0.429, 0.5),
-        ("500 Hz", 1.75, 0.05, 500.0, 0.2, 5e-3, 0.985, 1.1),
+        ("800 Hz", 1.75, 0.05, 800.0, 0.2, 5e-3, 0.342, 0.4),
+        ("700 Hz", 1.75, 0.05, 700.0, 0.2, 5e-3, 0.434, 0.5),
+        ("500 Hz", 1.75, 0.05, 500.0, 0.2, 5e-3, 0.998, 1.1),
         (
             "noisy accelerometers",
             1.75,
@@ -509,7 +510,7 @@ fn stick_slip_hard_cases() {
             10_000.0,
             0.2,
             0.2,
-            1.40,
+            1.43,
             1.5,
         ),
     ];

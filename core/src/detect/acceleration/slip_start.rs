@@ -142,7 +142,12 @@ impl<const N: usize> PhaseDetector<N> {
         let x0 = rel(p, k) - tb;
         // (A missing sample among them: the line through the other two, if two.)
         let span = (1u64 << (end.saturating_sub(p) + 1).min(START_LINE_SAMPLES)) - 1;
-        let gaps = (self.missing_mask(k) >> (k - end).min(63)) & span;
+        let back = k - end;
+        let gaps = if back < 64 {
+            (self.missing_mask(k) >> back) & span
+        } else {
+            0
+        };
         if gaps != 0 {
             let mut two = (p..=end).filter(|&i| (gaps >> (end - i)) & 1 == 0);
             let (Some(i), Some(j)) = (two.next(), two.next()) else {
