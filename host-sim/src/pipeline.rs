@@ -195,6 +195,10 @@ pub struct Tracked {
     pub start_accel: Option<f32>,
     /// The base accelerometer's step at the sample's event (m/s², in the model's units).
     pub event_step: f32,
+    /// The sliding side of the slip start of the sample before, confirmed at its second sample
+    /// ([`EventDetector::late_slip_start_accel`]; NaN at any other sample), in the model's
+    /// units.
+    pub late_start_accel: f32,
 }
 
 /// [`InputTracker`] of a plan.
@@ -220,6 +224,7 @@ pub fn input_tracker(plan: &Plan) -> Result<InputTracker> {
                     let step = d.event_step(ssvr_proto::Event::from_detector(e).age_samples);
                     slip_start_input(step, tracked.1, inverse)
                 }),
+                late_start_accel: slip_start_input(d.late_slip_start_accel(), tracked.1, inverse),
             }
         }))
     }

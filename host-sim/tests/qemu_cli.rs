@@ -122,12 +122,13 @@ fn check_common(v: &Value, samples: u64) {
     // least squares' rows written out; +3.7 KB in the twelfth for predict mode's table start
     // allowing for the table's lag, once per run in f64; +1.4 KB in the thirteenth for the top's
     // curved start below ~4.4 kHz and +1.7 KB for the events' steps in the oscillator
-    // identification; +3.1 KB in the fourteenth for missing samples at coarse rates (their
+    // identification; +4.1 KB in the fourteenth for missing samples at coarse rates (their
     // indices kept, the jump test after a gap, the gap refilled, fills held after a jump) and
-    // strong jump breakaways confirmed early; the velocity-dependent law is compiled
+    // strong jump breakaways confirmed at their second sample (the sliding side a sample
+    // later, through the pipeline to the model); the velocity-dependent law is compiled
     // in only for a scene with one); the budget is 96 KiB, bounded here a little above the
     // measured size so that a regression fails.
-    assert!(num(v, "board_flash_bytes") <= 93.5 * 1024.0);
+    assert!(num(v, "board_flash_bytes") <= 94.5 * 1024.0);
     assert!(num(v, "board_ram_bytes") <= 8.0 * 1024.0);
     // The model as the pipeline runs it, all identification on, against the budget of
     // 50 instructions per steady sample (reported, not met by the stick-slip and fixed-base

@@ -85,6 +85,15 @@ pub trait EventDetector: Sized {
     fn slip_start_accel(&self) -> f32 {
         f32::NAN
     }
+    /// Whether the last slip start's sliding side comes a sample later (a strong jump breakaway
+    /// confirmed at its second sample: NaN in [`Self::slip_start_accel`]).
+    fn side_pending(&self) -> bool {
+        false
+    }
+    /// That sliding side (m/s²), at the sample after such a slip start; NaN at any other.
+    fn late_slip_start_accel(&self) -> f32 {
+        f32::NAN
+    }
     /// The step of the detector's input at an event `age` sample intervals before the last
     /// sample processed (the base accelerometer's jump at a friction event; NaN when the
     /// detector does not read the base accelerometer: the displacement's).
@@ -152,6 +161,14 @@ impl<const N: usize> EventDetector for PhaseDetector<N> {
 
     fn slip_start_accel(&self) -> f32 {
         PhaseDetector::slip_start_accel(self)
+    }
+
+    fn side_pending(&self) -> bool {
+        PhaseDetector::side_pending(self)
+    }
+
+    fn late_slip_start_accel(&self) -> f32 {
+        PhaseDetector::late_slip_start_accel(self)
     }
 
     fn event_step(&self, age: f32) -> f32 {

@@ -134,6 +134,11 @@ struct BatchEvents {
     /// would go without (its identification blocks as sampled).
     steps: [f32; 4],
     stepped: usize,
+    /// Bit j: sample j brings the sliding side of a slip start confirmed at its second sample
+    /// ([`EventDetector::late_slip_start_accel`]); the sides, in order (two at most).
+    late_mask: u32,
+    lates: [f32; 2],
+    late_noted: usize,
 }
 
 impl BatchEvents {
@@ -145,6 +150,9 @@ impl BatchEvents {
             noted: 0,
             steps: [f32::NAN; 4],
             stepped: 0,
+            late_mask: 0,
+            lates: [f32::NAN; 2],
+            late_noted: 0,
         }
     }
 }
@@ -180,6 +188,9 @@ pub struct Pipeline<M, D, G = Option<TableGain>> {
     index: u32,
     zeroing: Zeroing,
     gain: G,
+    /// The last slip start's sliding side comes with the next sample
+    /// ([`EventDetector::side_pending`]).
+    side_due: bool,
     /// Counters.
     pub stats: Stats,
 }
@@ -195,6 +206,7 @@ impl<M: Model, D: EventDetector, G: GainSlot> Pipeline<M, D, G> {
             index: 0,
             zeroing: Zeroing::new(0),
             gain: G::none(),
+            side_due: false,
             stats: Stats::default(),
         }
     }
@@ -248,6 +260,9 @@ impl<M: Model, D: EventDetector, G: GainSlot> Pipeline<M, D, G> {
         for (s, fr) in samples.iter().zip(frames.iter_mut()).take(BATCH) {
             let channels;
             (*fr, channels) = self.detect(s);
+            if self.side_due {
+                self.note_late_side(&mut ev, n);
+            }
             if let Some(e) = &fr.event {
                 self.note_event(&mut ev, n, e);
             }
@@ -258,10 +273,17 @@ impl<M: Model, D: EventDetector, G: GainSlot> Pipeline<M, D, G> {
             mask: events,
             starts,
             steps,
+            late_mask,
+            lates,
             ..
         } = ev;
-        let (mut i, mut pushed, mut stepped) = (0, 0usize, 0usize);
+        let (mut i, mut pushed, mut stepped, mut late) = (0, 0usize, 0usize, 0usize);
         while i < n {
+            if late_mask & (1 << i) != 0 {
+                self.model
+                    .note_late_slip_start(lates.get(late).copied().unwrap_or(f32::NAN));
+                late += 1;
+            }
             if let Some(fr) = frames.get_mut(i) {
                 if let Some(e) = fr.event {
                     if e.kind == EventKind::SlipStart {
@@ -297,7 +319,7 @@ impl<M: Model, D: EventDetector, G: GainSlot> Pipeline<M, D, G> {
     /// without any event.)
     #[cold]
     #[inline(never)]
-    fn note_event(&self, ev: &mut BatchEvents, n: usize, e: &Event) {
+    fn note_event(&mut self, ev: &mut BatchEvents, n: usize, e: &Event) {
         ev.mask |= 1 << n;
         let k = self.detector.gain_mismatch();
         let inverse = self.gain.get().map_or(1.0, TableGain::inverse);
@@ -310,7 +332,27 @@ impl<M: Model, D: EventDetector, G: GainSlot> Pipeline<M, D, G> {
                 *a = slip_start_input(self.detector.slip_start_accel(), k, inverse);
             }
             ev.noted += 1;
+            self.side_due = self.detector.side_pending();
         }
+    }
+
+    /// The sample `n` after a slip start confirmed at its second sample: its sliding side, in
+    /// the model's units, noted for the model before the sample's run (the run starts there).
+    #[cold]
+    #[inline(never)]
+    fn note_late_side(&mut self, ev: &mut BatchEvents, n: usize) {
+        self.side_due = false;
+        let a = self.detector.late_slip_start_accel();
+        if a.is_nan() {
+            return;
+        }
+        let inverse = self.gain.get().map_or(1.0, TableGain::inverse);
+        if let Some(x) = ev.lates.get_mut(ev.late_noted) {
+            *x = slip_start_input(a, self.detector.gain_mismatch(), inverse);
+            ev.late_mask |= 1 << n;
+            ev.mask |= 1 << n;
+        }
+        ev.late_noted += 1;
     }
 
     /// One sample (a batch of one).

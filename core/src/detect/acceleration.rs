@@ -64,8 +64,8 @@ const STALL_FORCE: usize = 8;
 /// … plus this many times the magnitudes of s̈'s last second and third differences.
 const CURVATURES: f32 = 4.0;
 
-/// A jump breakaway whose first samples are this many thresholds is confirmed at its third
-/// ([`PhaseDetector`]'s `strong_jump`): 20 × 6σ√2 ≈ 170 σ of a sample's noise.
+/// A jump breakaway whose first two samples are this many thresholds is confirmed at its
+/// second ([`PhaseDetector`]'s `strong_jump`): 20 × 6σ√2 ≈ 170 σ of a sample's noise.
 const STRONG_JUMP: f32 = 20.0;
 
 /// Longest run of missing samples refilled from the measured ones around it
@@ -215,6 +215,12 @@ pub struct PhaseDetector<const N: usize> {
     /// The last slip start's sliding side at its start time: s̈ of the parabola (or line)
     /// through its first samples above the threshold, extrapolated back (m/s²; NaN before any).
     start_accel: f32,
+    /// A slip start confirmed at its second sample ([`STRONG_JUMP`]) whose sliding side waits
+    /// for its third: its first sample above the threshold, the confirming sample and the
+    /// start's time relative to it.
+    side_due: Option<(u64, u64, f32)>,
+    /// That sliding side, once its third sample is in (NaN: none), and the sample it came with.
+    late_side: (f32, u64),
     /// The latest [`MISSING_KEPT`] missing samples' indices + 1 (0: none),
     /// a ring: a missing sample is filled in the ring by the linear continuation of the two
     /// before it, and the fits leave it out ([`Self::missing_mask`]).
@@ -274,6 +280,8 @@ impl<const N: usize> PhaseDetector<N> {
             gain: 0.0,
             table_zero: 0.0,
             start_accel: f32::NAN,
+            side_due: None,
+            late_side: (f32::NAN, 0),
             missing_at: [0; MISSING_KEPT],
             jump_at: 0,
             missing_next: 0,
@@ -302,14 +310,35 @@ impl<const N: usize> PhaseDetector<N> {
     /// The last slip start's slip acceleration on its sliding side at its start time (m/s²;
     /// NaN before any): its first [`START_LINE_SAMPLES`] samples above the threshold, the
     /// parabola through them (the first within [`START_PARABOLA_SAMPLES`] of the start) or
-    /// their least-squares line (further; the line through two when only two are in),
-    /// extrapolated back to the start. The slip acceleration is zero before
+    /// their least-squares line (further), extrapolated back to the start; NaN for a slip start
+    /// confirmed at its second sample, whose side comes a sample later
+    /// ([`Self::late_slip_start_accel`]). The slip acceleration is zero before
     /// the start and jumps there by (μs − μ)·(m1 + m2)·g/m2 toward the sliding direction (a
     /// Coulomb interface): with the table's acceleration and the top's at the start, it gives
     /// the kinetic friction of the slide from the momentum balance, whatever μs is. Read it
     /// with the [`SlipEvent::SlipStart`] it belongs to: the next slip start replaces it.
     pub fn slip_start_accel(&self) -> f32 {
         self.start_accel
+    }
+
+    /// Whether the last slip start, confirmed at its second sample (a strong jump breakaway),
+    /// has its sliding side still to come: NaN in [`Self::slip_start_accel`], the parabola through
+    /// its first three samples in [`Self::late_slip_start_accel`] one sample later.
+    pub fn side_pending(&self) -> bool {
+        self.side_due.is_some()
+    }
+
+    /// The sliding side (m/s², as [`Self::slip_start_accel`]) of the slip start confirmed at the
+    /// sample before the last one processed, at its second sample: the parabola through its
+    /// first three; NaN at any other sample, or when that third sample brought an event or the
+    /// base stuck.
+    pub fn late_slip_start_accel(&self) -> f32 {
+        let (side, at) = self.late_side;
+        if at != 0 && at + 1 == self.k {
+            side
+        } else {
+            f32::NAN
+        }
     }
 
     /// The step of the slip acceleration (m/s²) at the event just detected, `age` sample
@@ -438,7 +467,28 @@ impl<const N: usize> PhaseDetector<N> {
         if measured && self.gap != 0 {
             self.after_gap(k, event.is_none());
         }
+        if self.side_due.is_some() {
+            self.complete_side(k, event.is_none());
+        }
         event
+    }
+
+    /// The sample `k` after a slip start confirmed at its second: its sliding side from the
+    /// first three (`quiet`: `k` brought no event).
+    #[cold]
+    #[inline(never)]
+    fn complete_side(&mut self, k: u64, quiet: bool) {
+        let Some((p, confirmed, tb)) = self.side_due else {
+            return;
+        };
+        if confirmed == k {
+            // (Confirmed at this very sample.)
+            return;
+        }
+        self.side_due = None;
+        if quiet && self.direction != 0 && confirmed + 1 == k {
+            self.late_side = (self.start_line(p, k, tb - 1.0), k);
+        }
     }
 
     /// A missing sample `k`: noted, and s̈ continued linearly (a repeated value would be a
@@ -713,23 +763,23 @@ impl<const N: usize> PhaseDetector<N> {
             || self.in_band >= STALL_FORCE.saturating_mul(self.cfg.max_age_samples())
     }
 
-    /// A jump breakaway (expected: `jump_breakaway`) confirmed early, at its third sample `k`
-    /// (`along`: its s̈ towards the slide): the three at least [`STRONG_JUMP`] thresholds, the
-    /// sample before the first within one, all four measured (a fill continues a line). (Three:
-    /// the slip start's sliding side is the parabola through them; through two, at 1 kHz the
-    /// line's bias put M 1.35 % off in predict mode on El Centro.) A burst of three such
-    /// samples and nothing after them, which a fourth sample would reject as a spike, is taken
-    /// for a slip start: ~170 σ three times running is a fault of the sensor, not noise.
+    /// A jump breakaway (expected: `jump_breakaway`) confirmed early, at its second sample `k`
+    /// (`along`: its s̈ towards the slide): the two at least [`STRONG_JUMP`] thresholds, the
+    /// sample before the first within one, all three measured (a fill continues a line). Its
+    /// sliding side, the parabola through its first three samples, comes a sample later
+    /// ([`Self::late_slip_start_accel`]): the line through two put predict mode's M 1.35 % off
+    /// on El Centro at 1 kHz. A burst of two such samples and nothing after them, which a
+    /// fourth sample would reject as a spike, is taken for a slip start: ~170 σ twice running
+    /// is a fault of the sensor, not noise.
     #[inline]
     fn strong_jump(&self, p: u64, k: u64, along: f32) -> bool {
         let strong = STRONG_JUMP * self.cfg.threshold_m_s2;
         self.cfg.jump_breakaway
-            && k == p + 2
+            && k == p + 1
             && along >= strong
             && libm::fabsf(self.at(p)) >= strong
-            && libm::fabsf(self.at(p + 1)) >= strong
             && libm::fabsf(self.at(p - 1)) < self.cfg.threshold_m_s2
-            && self.missing_mask(k) & 0b1111 == 0
+            && self.missing_mask(k) & 0b111 == 0
     }
 
     /// A stuck sample (`measured`: not a fill, which only counts towards a pending slip start's
@@ -844,17 +894,20 @@ mod tests {
         assert!((events[1].0 - (tb + ur)).abs() < 0.02, "{events:?}");
     }
 
-    /// A strong jump breakaway (μs > μ told: `jump_breakaway`) is confirmed at its third sample,
-    /// not its fourth: at 1 kHz each sample the stuck phase's prediction runs on past the start
-    /// costs the top up to ~0.05 m/s² on El Centro. Its time (within its sample interval) and
-    /// sliding side (within 2e-3 m/s²) are as good as a fourth sample's; a jump below 20 thresholds, or a start not expected to jump,
-    /// waits for the fourth, and a lone spike of any size is no slip start.
+    /// A strong jump breakaway (μs > μ told: `jump_breakaway`) is confirmed at its second
+    /// sample, not its fourth: at 1 kHz each sample the stuck phase's prediction runs on past
+    /// the start costs the top up to ~0.05 m/s² on El Centro. Its time is as good (within its
+    /// sample interval); its sliding side is NaN at the confirmation and comes a sample later,
+    /// the parabola through its first three samples (within 2e-3 m/s², as a fourth sample's
+    /// confirmation gives it at once). A jump below 20 thresholds, or a start not expected to
+    /// jump, waits for the fourth, and a lone spike of any size is no slip start.
     #[test]
-    fn a_strong_jump_breakaway_is_confirmed_at_its_third_sample() {
+    fn a_strong_jump_breakaway_is_confirmed_at_its_second_sample() {
         let run = |cfg: PhaseDetectorConfig, jump: f64, spike: bool| {
             let mut d = PhaseDetector::<64>::new(cfg).unwrap();
             let tb = 50.4;
             let mut found = None;
+            let mut side = None;
             for k in 0..120u64 {
                 let u = k as f64 - tb;
                 let a = if spike {
@@ -868,24 +921,38 @@ mod tests {
                 } else {
                     0.0
                 };
-                if let Some(e) = d.process(a as f32) {
+                let pending = d.side_pending();
+                let event = d.process(a as f32);
+                if pending {
+                    assert!(!d.side_pending());
+                    side = Some(d.late_slip_start_accel() as f64);
+                } else {
+                    assert!(d.late_slip_start_accel().is_nan(), "{k}");
+                }
+                if let Some(e) = event {
                     assert!(found.is_none(), "{e:?} at {k}");
                     let start = k as f64 - e.age_samples() as f64;
-                    // (Its sliding side against the signal's at the start found: a jump start
-                    // is timed to its sample interval.)
-                    let x = start - tb;
-                    let side = jump + 0.3 * x - 0.02 * x * x;
-                    found = Some((k, x, d.slip_start_accel() as f64 - side));
+                    found = Some((k, start - tb));
+                    if !d.side_pending() {
+                        side = Some(d.slip_start_accel() as f64);
+                    } else {
+                        assert!(d.slip_start_accel().is_nan());
+                    }
                 }
             }
-            found
+            // (Its sliding side against the signal's at the start found: a jump start is timed
+            // to its sample interval.)
+            found.map(|(k, x)| {
+                let at_start = jump + 0.3 * x - 0.02 * x * x;
+                (k, x, side.unwrap_or(f64::NAN) - at_start)
+            })
         };
         let cfg = PhaseDetectorConfig::for_noise(5e-3).unwrap();
         let thr = f64::from(cfg.threshold_m_s2);
         let jumps = cfg.with_friction(0.25, 0.2);
-        // First sample above the threshold: 51; confirmed at 53 (strong) or 54.
+        // First sample above the threshold: 51; confirmed at 52 (strong) or 54.
         let (k, dt, side) = run(jumps, 8.75, false).unwrap();
-        assert_eq!(k, 53);
+        assert_eq!(k, 52);
         assert!(dt.abs() <= 0.5 && side.abs() < 2e-3, "{dt} {side}");
         let (k4, dt4, side4) = run(jumps, 10.0 * thr, false).unwrap();
         assert_eq!(k4, 54);
@@ -997,7 +1064,8 @@ mod tests {
     /// starting one). (3) A reversal with the two samples after it missing: the fills hold the
     /// value after the jump instead of continuing it, and the slide's velocity is the gapless
     /// run's within 1 % (it measured 100 % off). (4) A strong burst with a missing sample among
-    /// its first three is no slip start (a fill continues a line: it measured one).
+    /// its first two, or just before them, is no slip start (a fill continues a line: it
+    /// measured one).
     #[test]
     fn gaps_long_stuck_and_after_a_jump() {
         // (1)
@@ -1079,11 +1147,7 @@ mod tests {
         );
         // (4)
         let thr = f64::from(cfg.threshold_m_s2);
-        for burst in [
-            [100.0, f64::NAN, 100.0],
-            [100.0, 100.0, f64::NAN],
-            [f64::NAN, 100.0, 100.0],
-        ] {
+        for burst in [[100.0, f64::NAN, 100.0], [f64::NAN, 100.0, 100.0]] {
             let mut signal = std::vec![0.0; 60];
             for (i, b) in burst.iter().enumerate() {
                 signal[30 + i] = b * thr;
@@ -1121,12 +1185,22 @@ mod tests {
         let run = |cfg: PhaseDetectorConfig, jump: f64, slope: f64, tb: f64| {
             let mut d = PhaseDetector::<64>::new(cfg).unwrap();
             assert!(d.slip_start_accel().is_nan());
+            let mut late = false;
             for k in 0..400u64 {
                 let u = k as f64 - tb;
                 let a = if u > 0.0 { -(jump + slope * u) } else { 0.0 };
-                if let Some(SlipEvent::SlipStart { direction, .. }) = d.process(a as f32) {
+                let event = d.process(a as f32);
+                if late {
+                    // (Confirmed at its second sample: the side comes with the third.)
+                    return d.late_slip_start_accel() as f64;
+                }
+                if let Some(SlipEvent::SlipStart { direction, .. }) = event {
                     assert_eq!(direction, -1);
-                    return d.slip_start_accel() as f64;
+                    if !d.side_pending() {
+                        return d.slip_start_accel() as f64;
+                    }
+                    assert!(d.slip_start_accel().is_nan());
+                    late = true;
                 }
             }
             panic!("no slip start");
@@ -1140,7 +1214,7 @@ mod tests {
             assert!((a + 8.75).abs() < 6e-3, "jump at {tb}: {a}");
             let a = run(ramp, 8.75, 0.01, tb);
             assert!((a + 8.75).abs() < 0.03, "untold jump at {tb}: {a}");
-            // Confirmed after two samples: the line through them.
+            // Confirmed after two samples: the parabola through three, a sample later.
             let two = PhaseDetectorConfig {
                 confirm_samples: 2,
                 ..jump

@@ -29,6 +29,14 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
     /// slip acceleration's sliding side at the start (m/s², the detector's; 0 gives μs). `None`
     /// as there, and for a non-finite `slip_accel`.
     pub fn slide_coefficient(&self, age: T, measured: bool, slip_accel: T) -> Option<T> {
+        self.coefficient_of(self.slide_demand(age, measured)?, slip_accel)
+    }
+
+    /// The force per unit mass that held the base `age` samples before the next sample,
+    /// (M − 1)·ü1 + üg (m/s², signed; `measured` as in [`Self::slide_coefficient`]): kept
+    /// at a slip start whose sliding side comes later, for [`Self::coefficient_of`]. `None` as
+    /// there.
+    pub fn slide_demand(&self, age: T, measured: bool) -> Option<T> {
         let k = self.sample_index();
         // The time k − age lies between samples j0 = k − ⌈age⌉ and j0 + 1 (the latest kept
         // sample is k − 1: a younger time takes it); NaN fails the range test.
@@ -49,7 +57,14 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
         let (u1, y1) = if j0 + 1 < k { at(j0 + 1)? } else { (u0, y0) };
         let (u, y) = (u0 + (u1 - u0) * w, y0 + (y1 - y0) * w);
         let m = self.c.mp / self.c.p;
-        let mu = ((m - T::ONE) * y + u + slip_accel).abs() / (m * self.c.g);
+        Some((m - T::ONE) * y + u)
+    }
+
+    /// The kinetic friction coefficient |`demand` + `slip_accel`| / (M·g) of a slide whose
+    /// [`Self::slide_demand`] at its start is `demand` (`None` when not finite).
+    pub fn coefficient_of(&self, demand: T, slip_accel: T) -> Option<T> {
+        let m = self.c.mp / self.c.p;
+        let mu = (demand + slip_accel).abs() / (m * self.c.g);
         mu.is_finite().then_some(mu)
     }
 }

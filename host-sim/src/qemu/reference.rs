@@ -127,6 +127,9 @@ pub enum Reference {
         breakaways: Breakaways,
         /// The sliding side of the latest slip start its own detector found (the pipeline's).
         start_accel: f32,
+        /// A slip start pushed without its sliding side: the force that held the base
+        /// (the firmware model's `late_demand`).
+        late_demand: Option<f64>,
     },
 }
 
@@ -183,6 +186,7 @@ impl Reference {
                 prior: plan.specimen.structure,
                 breakaways: Breakaways::default(),
                 start_accel: f32::NAN,
+                late_demand: None,
             },
         };
         // (The firmware's fuse mode: the wide sliding observer until f and ξ are known.)
@@ -231,12 +235,23 @@ impl Reference {
                 prior,
                 breakaways,
                 start_accel,
+                late_demand,
             } => {
                 let mut channels = s.channels;
                 zeroing.apply(k as u32, &mut channels, f.flags);
                 let tracked = inputs(&mut channels, f.flags);
                 if let Some(a) = tracked.start_accel {
                     *start_accel = a;
+                }
+                // (A slip start's sliding side a sample late, before this sample's event: the
+                // pipeline's order.)
+                if tracked.late_start_accel.is_finite() {
+                    if let (Some(d), Some(b)) = (late_demand.take(), base_tuning.as_mut()) {
+                        if let Some(mu) = est.coefficient_of(d, f64::from(tracked.late_start_accel))
+                        {
+                            b.late_slide_side(mu as f32);
+                        }
+                    }
                 }
                 if let Some(e) = f.event.filter(|_| f.flags & flags::EVENT_PUSHED != 0) {
                     let phase = if e.is_stick() { 0 } else { e.level };
@@ -246,6 +261,9 @@ impl Reference {
                         } else {
                             est.set_friction(f64::from(fr.since_slip_start()));
                         }
+                    }
+                    if e.kind == EventKind::SlipStart {
+                        *late_demand = None;
                     }
                     if let Some(b) = base_tuning.as_mut() {
                         // The first slides' friction from the breakaway (the firmware's code).
@@ -261,6 +279,11 @@ impl Reference {
                             if let Some(m) = b.slip_start(&at) {
                                 est.set_friction(f64::from(m));
                             }
+                            *late_demand = if start_accel.is_nan() {
+                                est.slide_demand(f64::from(age), !*predict)
+                            } else {
+                                None
+                            };
                         }
                         if let Some(mu) = b.mu_at_event(phase, e.age_samples) {
                             est.set_friction(f64::from(mu));

@@ -191,6 +191,13 @@ pub trait Model {
     fn note_slip_start(&mut self, slip_accel: f32) {
         let _ = slip_accel;
     }
+    /// The sliding side of the slip start pushed a sample before (m/s², the detector's
+    /// [`EventDetector::late_slip_start_accel`](crate::EventDetector::late_slip_start_accel)),
+    /// noted before this sample's run: a slip start confirmed at its second sample was pushed
+    /// without it.
+    fn note_late_slip_start(&mut self, slip_accel: f32) {
+        let _ = slip_accel;
+    }
     /// The base accelerometer's step at the event about to be pushed (m/s², the detector's
     /// [`EventDetector::event_step`](crate::EventDetector::event_step); NaN: unknown), for the
     /// identification's blocks.
@@ -297,6 +304,9 @@ impl<M: Model + ?Sized> Model for std::boxed::Box<M> {
     }
     fn note_slip_start(&mut self, slip_accel: f32) {
         (**self).note_slip_start(slip_accel)
+    }
+    fn note_late_slip_start(&mut self, slip_accel: f32) {
+        (**self).note_late_slip_start(slip_accel)
     }
     fn note_event_step(&mut self, step: f32) {
         (**self).note_event_step(step)

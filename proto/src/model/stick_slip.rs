@@ -61,6 +61,10 @@ pub struct StickSlipModel<
     /// The slip acceleration on the sliding side of the slip start to push (the detector's,
     /// noted with its sample).
     start_accel: f32,
+    /// A slip start pushed without its sliding side (it comes a sample later:
+    /// `Model::note_late_slip_start`): the force that held the base at it
+    /// ([`StickSlipEstimator::slide_demand`](ssvr_core::stick_slip::StickSlipEstimator::slide_demand)).
+    late_demand: Option<f32>,
     /// The base's step at the event about to be pushed (`Model::note_event_step`).
     event_step: f32,
     /// Fuse mode: the breakaway coefficients read the measured top acceleration (else the
@@ -108,6 +112,7 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
             fuse: true,
             breakaways: Breakaways::default(),
             start_accel: f32::NAN,
+            late_demand: None,
             event_step: f32::NAN,
             friction: F::none(),
             base_tuning: B::none(),
@@ -198,6 +203,9 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot> Model
                 self.est.set_friction(f.since_slip_start());
             }
         }
+        if e.kind == EventKind::SlipStart {
+            self.late_demand = None;
+        }
         if e.kind == EventKind::SlipStart && e.age_samples <= self.max_age {
             let at = SlipStart::of(
                 &self.est,
@@ -213,6 +221,11 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot> Model
                     self.est.set_friction(m);
                 }
             }
+            self.late_demand = if self.start_accel.is_nan() {
+                self.est.slide_demand(e.age_samples, self.fuse)
+            } else {
+                None
+            };
             self.start_accel = f32::NAN;
         }
         // Predict mode without a rest: each direction's friction until both are known.
@@ -243,6 +256,18 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot> Model
 
     fn note_slip_start(&mut self, slip_accel: f32) {
         self.start_accel = slip_accel;
+    }
+
+    #[cold]
+    fn note_late_slip_start(&mut self, slip_accel: f32) {
+        let (Some(demand), Some(b)) = (self.late_demand.take(), self.base_tuning.get_mut()) else {
+            return;
+        };
+        // (The identifications' part of a slip start's sliding side: the slide's friction came
+        // from its breakaway.)
+        if let Some(mu) = self.est.coefficient_of(demand, slip_accel) {
+            b.late_slide_side(mu);
+        }
     }
 
     fn note_event_step(&mut self, step: f32) {

@@ -119,7 +119,14 @@ impl<const N: usize> PhaseDetector<N> {
             v += 0.5 * (a(i) + a(i + 1));
             i += 1;
         }
-        self.start_accel = self.start_line(p, k, tb);
+        // (Confirmed at its second sample: its sliding side a sample later.)
+        if k + 1 < p + START_LINE_SAMPLES {
+            self.start_accel = f32::NAN;
+            self.side_due = Some((p, k, tb));
+        } else {
+            self.start_accel = self.start_line(p, k, tb);
+            self.side_due = None;
+        }
         self.v = v;
         self.v_unc = v_unc;
         self.v_held = false;
@@ -137,7 +144,7 @@ impl<const N: usize> PhaseDetector<N> {
     /// 1 kHz a line took the slide's μ ~1 % low), else the least-squares line (the parabola's noise grows
     /// with the distance: 10× the samples' at 2, 43× at 5); NaN with fewer than two. A missing
     /// one (its fill continues the stuck samples) is left out: the line through the other two.
-    fn start_line(&self, p: u64, k: u64, tb: f32) -> f32 {
+    pub(super) fn start_line(&self, p: u64, k: u64, tb: f32) -> f32 {
         let end = k.min(p + START_LINE_SAMPLES - 1);
         let x0 = rel(p, k) - tb;
         // (A missing sample among them: the line through the other two, if two.)

@@ -116,6 +116,17 @@ impl SlipStart {
 }
 
 impl BaseTuning {
+    /// The sliding side's kinetic coefficient `mu_k` of a slip start pushed without it (it came
+    /// a sample later: a strong jump breakaway confirmed at its second sample): what
+    /// [`Self::slip_start`] does with it for the identifications (the slides' mean, the mass
+    /// residual); the slide's own friction came from the breakaway.
+    pub fn late_slide_side(&mut self, mu_k: f32) {
+        if self.plausible(f64::from(mu_k)) {
+            self.slides.push(mu_k);
+            self.mass_residual(mu_k);
+        }
+    }
+
     /// The prior's static friction coefficient `mu_s` (the tuning starts with μs = μ): a slip
     /// start's breakaway coefficient times μ/μs is its slide's μ.
     pub fn with_static_friction(mut self, mu_s: f64) -> Self {
