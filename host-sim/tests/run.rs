@@ -495,7 +495,16 @@ fn stick_slip_hard_cases() {
         ("undamped", 1.75, 0.0, 10_000.0, 0.2, 5e-3, 0.043, 0.2),
         ("light base", 0.001, 0.05, 10_000.0, 0.2, 5e-3, 0.188, 0.3),
         // (0.74 % before the strong jump breakaways were confirmed at their second sample.)
-        ("1 kHz, μs > μ", 1.75, 0.05, 1_000.0, 0.25, 5e-3, 0.379, 0.45),
+        (
+            "1 kHz, μs > μ",
+            1.75,
+            0.05,
+            1_000.0,
+            0.25,
+            5e-3,
+            0.379,
+            0.45,
+        ),
         // Coarse sampling: the detector judges a jump of s̈ against its second and third
         // differences (with the second alone, a deceleration's zero crossing read as a
         // reversal: 18 / 6 / 1 events missed and as many invented at 500 / 700 / 800 Hz, 48 /
