@@ -135,9 +135,10 @@ struct BatchEvents {
     steps: [f32; 4],
     stepped: usize,
     /// Bit j: sample j brings the sliding side of a slip start confirmed at its second sample
-    /// ([`EventDetector::late_slip_start_accel`]); the sides, in order (two at most).
+    /// ([`EventDetector::late_slip_start_accel`]); the sides, in order (three at most: the
+    /// batch's first may belong to the previous batch's last slip start, beside two of its own).
     late_mask: u32,
-    lates: [f32; 2],
+    lates: [f32; 3],
     late_noted: usize,
 }
 
@@ -151,7 +152,7 @@ impl BatchEvents {
             steps: [f32::NAN; 4],
             stepped: 0,
             late_mask: 0,
-            lates: [f32::NAN; 2],
+            lates: [f32::NAN; 3],
             late_noted: 0,
         }
     }

@@ -62,9 +62,9 @@ pub struct StickSlipModel<
     /// noted with its sample).
     start_accel: f32,
     /// A slip start pushed without its sliding side (it comes a sample later:
-    /// `Model::note_late_slip_start`): the force that held the base at it
+    /// `Model::note_late_slip_start`; NaN: none): the force that held the base at it
     /// ([`StickSlipEstimator::slide_demand`](ssvr_core::stick_slip::StickSlipEstimator::slide_demand)).
-    late_demand: Option<f32>,
+    late_demand: f32,
     /// The base's step at the event about to be pushed (`Model::note_event_step`).
     event_step: f32,
     /// Fuse mode: the breakaway coefficients read the measured top acceleration (else the
@@ -112,7 +112,7 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
             fuse: true,
             breakaways: Breakaways::default(),
             start_accel: f32::NAN,
-            late_demand: None,
+            late_demand: f32::NAN,
             event_step: f32::NAN,
             friction: F::none(),
             base_tuning: B::none(),
@@ -204,7 +204,7 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot> Model
             }
         }
         if e.kind == EventKind::SlipStart {
-            self.late_demand = None;
+            self.late_demand = f32::NAN;
         }
         if e.kind == EventKind::SlipStart && e.age_samples <= self.max_age {
             let at = SlipStart::of(
@@ -222,9 +222,11 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot> Model
                 }
             }
             self.late_demand = if self.start_accel.is_nan() {
-                self.est.slide_demand(e.age_samples, self.fuse)
+                self.est
+                    .slide_demand(e.age_samples, self.fuse)
+                    .unwrap_or(f32::NAN)
             } else {
-                None
+                f32::NAN
             };
             self.start_accel = f32::NAN;
         }
@@ -260,7 +262,8 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot> Model
 
     #[cold]
     fn note_late_slip_start(&mut self, slip_accel: f32) {
-        let (Some(demand), Some(b)) = (self.late_demand.take(), self.base_tuning.get_mut()) else {
+        let demand = core::mem::replace(&mut self.late_demand, f32::NAN);
+        let (false, Some(b)) = (demand.is_nan(), self.base_tuning.get_mut()) else {
             return;
         };
         // (The identifications' part of a slip start's sliding side: the slide's friction came
