@@ -965,8 +965,8 @@ mod tests {
         assert_eq!(run(jumps, 100.0, true), None, "a spike");
     }
 
-    /// Missing samples in a slide sampled coarsely are no event, wherever they fall, one or
-    /// two in a row: a sliding oscillation of 34 samples per period and 7 m/s² (the Table 1
+    /// Missing samples in a slide sampled coarsely are no event, wherever they fall, one to
+    /// three in a row: a sliding oscillation of 34 samples per period and 7 m/s² (the Table 1
     /// specimen's at 1 kHz) on a slow ramp, with the default accelerometers' noise. The measured
     /// sample after a gap is judged against the continuation over the gap with the curvature
     /// of the measured samples before it (the linear fills' own second difference is 0: with
