@@ -965,6 +965,52 @@ mod tests {
         assert_eq!(run(jumps, 100.0, true), None, "a spike");
     }
 
+    /// Where the coarse slide starts, and its length (samples).
+    const COARSE_SLIDE_START: u64 = 20;
+    const COARSE_SLIDE_SAMPLES: u64 = 200;
+
+    /// A sliding oscillation of 34 samples per period and 7 m/s² (the Table 1 specimen's at
+    /// 1 kHz) on a slow ramp from [`COARSE_SLIDE_START`], with the default accelerometers' noise.
+    fn coarse_slide() -> std::vec::Vec<f64> {
+        let sigma = 5e-3 * core::f64::consts::SQRT_2;
+        let (tb, w, amp) = (
+            COARSE_SLIDE_START as f64,
+            2.0 * core::f64::consts::PI / 34.0,
+            7.0,
+        );
+        let mut noise = Noise(7);
+        (0..COARSE_SLIDE_SAMPLES)
+            .map(|k| {
+                let u = k as f64 - tb;
+                let s = if u <= 0.0 {
+                    0.0
+                } else {
+                    amp * libm::sin(w * u) + u / 34.0
+                };
+                s + sigma * noise.next()
+            })
+            .collect()
+    }
+
+    /// The detector over `signal` with the samples in `gap` missing: its events with their
+    /// times, and the detector after them.
+    fn run_with_gap(
+        signal: &[f64],
+        cfg: PhaseDetectorConfig,
+        gap: core::ops::Range<u64>,
+    ) -> (std::vec::Vec<(f64, SlipEvent)>, PhaseDetector<64>) {
+        let mut d = PhaseDetector::<64>::new(cfg).unwrap();
+        let mut events = std::vec::Vec::new();
+        for (k, &a) in signal.iter().enumerate() {
+            let k = k as u64;
+            let x = if gap.contains(&k) { f32::NAN } else { a as f32 };
+            if let Some(e) = d.process(x) {
+                events.push((k as f64 - e.age_samples() as f64, e));
+            }
+        }
+        (events, d)
+    }
+
     /// Missing samples in a slide sampled coarsely are no event, wherever they fall, one to
     /// three in a row: a sliding oscillation of 34 samples per period and 7 m/s² (the Table 1
     /// specimen's at 1 kHz) on a slow ramp, with the default accelerometers' noise. The measured
@@ -975,33 +1021,9 @@ mod tests {
     #[test]
     fn missing_samples_in_a_coarse_slide_are_no_event() {
         let cfg = PhaseDetectorConfig::for_noise(5e-3).unwrap();
-        let sigma = 5e-3 * core::f64::consts::SQRT_2;
-        let (tb, w, amp) = (20.0, 2.0 * core::f64::consts::PI / 34.0, 7.0);
-        let mut noise = Noise(7);
-        let n = 200u64;
-        let signal: std::vec::Vec<f64> = (0..n)
-            .map(|k| {
-                let u = k as f64 - tb;
-                let s = if u <= 0.0 {
-                    0.0
-                } else {
-                    amp * libm::sin(w * u) + u / 34.0
-                };
-                s + sigma * noise.next()
-            })
-            .collect();
-        let run = |gap: core::ops::Range<u64>| {
-            let mut d = PhaseDetector::<64>::new(cfg).unwrap();
-            let mut events = std::vec::Vec::new();
-            for (k, &a) in signal.iter().enumerate() {
-                let k = k as u64;
-                let x = if gap.contains(&k) { f32::NAN } else { a as f32 };
-                if let Some(e) = d.process(x) {
-                    events.push((k as f64 - e.age_samples() as f64, e));
-                }
-            }
-            events
-        };
+        let (tb, n) = (COARSE_SLIDE_START as f64, COARSE_SLIDE_SAMPLES);
+        let signal = coarse_slide();
+        let run = |gap: core::ops::Range<u64>| run_with_gap(&signal, cfg, gap).0;
         let clean = run(0..0);
         assert_eq!(clean.len(), 1, "{clean:?}");
         assert!(matches!(
@@ -1070,33 +1092,9 @@ mod tests {
     fn gaps_long_stuck_and_after_a_jump() {
         // (1)
         let cfg = PhaseDetectorConfig::for_noise(5e-3).unwrap();
-        let sigma = 5e-3 * core::f64::consts::SQRT_2;
-        let (tb, w, amp) = (20.0, 2.0 * core::f64::consts::PI / 34.0, 7.0);
-        let mut noise = Noise(7);
-        let n = 200u64;
-        let slide: std::vec::Vec<f64> = (0..n)
-            .map(|k| {
-                let u = k as f64 - tb;
-                let s = if u <= 0.0 {
-                    0.0
-                } else {
-                    amp * libm::sin(w * u) + u / 34.0
-                };
-                s + sigma * noise.next()
-            })
-            .collect();
-        let run = |signal: &[f64], cfg: PhaseDetectorConfig, gap: core::ops::Range<u64>| {
-            let mut d = PhaseDetector::<64>::new(cfg).unwrap();
-            let mut events = std::vec::Vec::new();
-            for (k, &a) in signal.iter().enumerate() {
-                let k = k as u64;
-                let x = if gap.contains(&k) { f32::NAN } else { a as f32 };
-                if let Some(e) = d.process(x) {
-                    events.push((k as f64 - e.age_samples() as f64, e));
-                }
-            }
-            (events, d)
-        };
+        let (tb, n) = (COARSE_SLIDE_START as f64, COARSE_SLIDE_SAMPLES);
+        let slide = coarse_slide();
+        let run = run_with_gap;
         let clean = run(&slide, cfg, 0..0).0;
         let mut wrong = 0;
         for len in [10u64, 15, 20] {
@@ -1110,6 +1108,7 @@ mod tests {
         assert!(wrong <= 2, "{wrong}");
         // (2)
         let mut noise = Noise(11);
+        let sigma = 5e-3 * core::f64::consts::SQRT_2;
         let stuck: std::vec::Vec<f64> = (0..300).map(|_| sigma * noise.next()).collect();
         for len in [4u64, 8, 24] {
             for at in 20..(300 - len) {
