@@ -1,7 +1,8 @@
 //! The firmware runs the pipeline in batches of `BATCH` samples, the host one sample at a time:
 //! both must give the same frames bit for bit (flags, events, predictions) and the same counters,
-//! for every model, on signals with friction events, events at batch edges, and unusable
-//! samples (NaN, missing, saturated), and with the sensor log's reversals as the events; with the
+//! for every model, on signals with friction events, events at batch edges, strong jump
+//! breakaways whose sliding side comes a sample later, and unusable samples (NaN, missing,
+//! saturated), and with the sensor log's reversals as the events; with the
 //! table accelerometer's gain identification on (its samples are the detector's, taken one at a
 //! time in either case).
 
@@ -83,11 +84,31 @@ fn sample(k: usize) -> Sample {
     s
 }
 
+/// [`sample`] with strong jump breakaways (μs > μ): every 1001st sample the slip acceleration
+/// jumps from 0 to 2 m/s² (~47 of the detector's thresholds, beyond its 20 for a slip start
+/// confirmed at its second sample), slides on a ramp for 20 samples, then at −2 m/s² for 20. A
+/// period of 1001 samples puts the breakaways at every position of a batch of 16 in turn.
+fn sample_with_jumps(k: usize) -> Sample {
+    let mut s = sample(k);
+    let m = k % 1001;
+    let slip_accel = if (600..620).contains(&m) {
+        2.0 + 0.1 * (m - 600) as f32
+    } else if (620..640).contains(&m) {
+        -2.0
+    } else {
+        0.0
+    };
+    if s.channels[1].is_finite() {
+        s.channels[1] = s.channels[0] + slip_accel;
+    }
+    s
+}
+
 fn compare<M: Model + FromPlan + Clone, D: EventDetector + Clone>(
     model: ModelKind,
     source: EventSource,
 ) {
-    compare_with::<M, D>(model, source, 0.0, [0.0; 3], false, Mode::Fuse);
+    compare_with::<M, D>(model, source, 0.0, [0.0; 3], Signal::Ramps, Mode::Fuse);
 }
 
 /// [`sample`] starting at rest: the accelerations faded in over the first 2 000 samples, the
@@ -104,18 +125,39 @@ fn sample_from_rest(k: usize) -> Sample {
     s
 }
 
-/// [`compare`] with a rest of `rest_s` before the input and accelerometer offsets (`from_rest`:
-/// the signals of [`sample_from_rest`]), in `mode` (predict mode: the table's planned input
-/// the samples' own, less their offset).
+/// The signals a comparison runs on.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Signal {
+    /// [`sample`]: ramp breakaways.
+    Ramps,
+    /// [`sample_from_rest`].
+    FromRest,
+    /// [`sample_with_jumps`]: strong jump breakaways.
+    Jumps,
+}
+
+impl Signal {
+    fn sample(self, k: usize) -> Sample {
+        match self {
+            Signal::Ramps => sample(k),
+            Signal::FromRest => sample_from_rest(k),
+            Signal::Jumps => sample_with_jumps(k),
+        }
+    }
+}
+
+/// [`compare`] with a rest of `rest_s` before the input and accelerometer offsets, on `signal`,
+/// in `mode` (predict mode: the table's planned input the samples' own, less their offset).
 fn compare_with<M: Model + FromPlan + Clone, D: EventDetector + Clone>(
     model: ModelKind,
     source: EventSource,
     rest_s: f64,
     bias: [f32; 3],
-    from_rest: bool,
+    signal: Signal,
     mode: Mode,
 ) -> Pipeline<M, D> {
     let rate = specimen().sample_rate_hz;
+    let from_rest = signal == Signal::FromRest;
     // (The planned table: the samples' own before their dropouts.)
     let table = |t: f64| f64::from(table_of((t * rate).round() as usize, from_rest));
     let plan = Plan::new(specimen(), model)
@@ -137,11 +179,7 @@ fn compare_with<M: Model + FromPlan + Clone, D: EventDetector + Clone>(
     let n = 20_000;
     let samples: Vec<Sample> = (0..n)
         .map(|k| {
-            let mut s = if from_rest {
-                sample_from_rest(k)
-            } else {
-                sample(k)
-            };
+            let mut s = signal.sample(k);
             for (c, b) in s.channels.iter_mut().zip(bias) {
                 *c += b;
             }
@@ -238,7 +276,7 @@ fn zeroed_offsets_batches_equal_single_steps() {
         EventSource::Detector,
         0.05,
         bias,
-        false,
+        Signal::Ramps,
         Mode::Fuse,
     );
     compare_with::<RectangularModel, DisplacementDetector<64>>(
@@ -246,7 +284,7 @@ fn zeroed_offsets_batches_equal_single_steps() {
         EventSource::Detector,
         0.05,
         bias,
-        false,
+        Signal::Ramps,
         Mode::Fuse,
     );
 }
@@ -260,7 +298,7 @@ fn offsets_after_a_start(bias: [f32; 3], mode: Mode) -> [f32; 3] {
         EventSource::Detector,
         0.0,
         bias,
-        true,
+        Signal::FromRest,
         mode,
     )
     .model()
@@ -394,4 +432,165 @@ fn two_slip_starts_in_a_batch_keep_their_own_sliding_sides() {
 fn a_table_start_batches_equal_single_steps() {
     let table = offsets_after_a_start([0.2, 0.2, 0.0], Mode::Predict)[0];
     assert!((table - 0.2).abs() < 1e-5, "table offset {table}");
+}
+
+/// Strong jump breakaways ([`sample_with_jumps`]) at every position of a batch: confirmed at
+/// their second sample, with their sliding side a sample later
+/// ([`EventDetector::late_slip_start_accel`]), which may fall in the next batch. The stick-slip
+/// model's frames, counters and offsets are the same batched as one sample at a time, in both
+/// modes; and every late side the detector gives reaches the model once, in order, among the
+/// events (a detector that records its late sides and a model that records what it gets).
+#[test]
+fn strong_jump_breakaways_batches_equal_single_steps() {
+    for mode in [Mode::Fuse, Mode::Predict] {
+        compare_with::<StickSlipModel<H>, AccelerationDetector<64>>(
+            ModelKind::StickSlip,
+            EventSource::Detector,
+            0.0,
+            [0.0; 3],
+            Signal::Jumps,
+            mode,
+        );
+    }
+
+    #[derive(Debug, Clone)]
+    struct Watch {
+        inner: AccelerationDetector<64>,
+        k: usize,
+        /// The samples that confirmed a slip start whose side comes a sample later.
+        pending_at: Vec<usize>,
+        /// The late sides, in order (bits).
+        sides: Vec<u32>,
+    }
+    impl Watch {
+        fn after(&mut self, e: Option<SlipEvent>) -> Option<SlipEvent> {
+            if self.inner.side_pending() {
+                self.pending_at.push(self.k);
+            }
+            let side = self.inner.late_slip_start_accel();
+            if !side.is_nan() {
+                self.sides.push(side.to_bits());
+            }
+            self.k += 1;
+            e
+        }
+    }
+    use ssvr_core::detect::displacement::SlipEvent;
+    impl EventDetector for Watch {
+        const INPUT: ssvr_proto::DetectorInput = AccelerationDetector::<64>::INPUT;
+        fn from_plan(plan: &Plan) -> Result<Self, ssvr_proto::PlanError> {
+            Ok(Self {
+                inner: AccelerationDetector::<64>::from_plan(plan)?,
+                k: 0,
+                pending_at: Vec::new(),
+                sides: Vec::new(),
+            })
+        }
+        fn process(&mut self, x: f32) -> Option<SlipEvent> {
+            let e = self.inner.process(x);
+            self.after(e)
+        }
+        fn process_with_reference(&mut self, x: f32, table_accel: f32) -> Option<SlipEvent> {
+            let e = self.inner.process_with_reference(x, table_accel);
+            self.after(e)
+        }
+        fn max_age_samples(&self) -> usize {
+            self.inner.max_age_samples()
+        }
+        fn offset(&self) -> f32 {
+            self.inner.offset()
+        }
+        fn gain_mismatch(&self) -> f32 {
+            self.inner.gain_mismatch()
+        }
+        fn slip_start_accel(&self) -> f32 {
+            self.inner.slip_start_accel()
+        }
+        fn side_pending(&self) -> bool {
+            self.inner.side_pending()
+        }
+        fn late_slip_start_accel(&self) -> f32 {
+            self.inner.late_slip_start_accel()
+        }
+        fn event_step(&self, age: f32) -> f32 {
+            self.inner.event_step(age)
+        }
+    }
+
+    /// What the model got: an event's kind, or a late side (bits).
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    enum Got {
+        Event(ssvr_proto::EventKind),
+        Late(u32),
+    }
+    #[derive(Debug, Clone, Default)]
+    struct Record {
+        got: Vec<Got>,
+    }
+    impl Model for Record {
+        fn kind(&self) -> ModelKind {
+            ModelKind::StickSlip
+        }
+        fn push(&mut self, e: &ssvr_proto::Event) -> Result<ssvr_proto::Pushed, ssvr_core::Error> {
+            self.got.push(Got::Event(e.kind));
+            Ok(ssvr_proto::Pushed::Yes)
+        }
+        fn note_late_slip_start(&mut self, slip_accel: f32) {
+            self.got.push(Got::Late(slip_accel.to_bits()));
+        }
+        fn note_inputs(&mut self, _: usize, _: &[f32; ssvr_proto::CHANNELS], _: u8) {}
+        fn predict_run(&mut self, _: &mut [Frame], _: usize) {}
+        fn mu_estimate(&self) -> Option<ssvr_core::stick_slip::MuEstimate> {
+            None
+        }
+        fn revised(&self, _: u64) -> Option<f32> {
+            None
+        }
+    }
+
+    let plan = Plan::new(specimen(), ModelKind::StickSlip).unwrap();
+    let new = || {
+        Pipeline::<Record, Watch, ()>::new(
+            Record::default(),
+            Watch::from_plan(&plan).unwrap(),
+            EventSource::Detector,
+            plan.disp_range_m(),
+        )
+    };
+    let samples: Vec<Sample> = (0..20_000).map(sample_with_jumps).collect();
+    let mut single = new();
+    for s in &samples {
+        single.step(s);
+    }
+    let mut batched = new();
+    let mut frames = [Frame::EMPTY; BATCH];
+    for chunk in samples.chunks(BATCH) {
+        batched.step_batch(chunk, &mut frames);
+    }
+    let watch = single.detector();
+    assert_eq!(watch.pending_at, batched.detector().pending_at);
+    assert_eq!(watch.sides, batched.detector().sides);
+    // Every breakaway but the first (the offsets' first samples) confirmed early, at every
+    // position of a batch, and each gives its side.
+    let positions: std::collections::BTreeSet<usize> =
+        watch.pending_at.iter().map(|k| k % BATCH).collect();
+    assert_eq!(positions.len(), BATCH, "{:?}", watch.pending_at);
+    assert!(watch.pending_at.len() >= 18, "{:?}", watch.pending_at);
+    assert_eq!(watch.sides.len(), watch.pending_at.len());
+    for side in &watch.sides {
+        let side = f32::from_bits(*side);
+        assert!((side - 2.0).abs() < 0.1, "side {side}");
+    }
+    // The model gets each, once, in order, in batches as one sample at a time.
+    assert_eq!(batched.model().got, single.model().got);
+    let lates: Vec<u32> = single
+        .model()
+        .got
+        .iter()
+        .filter_map(|g| match g {
+            Got::Late(bits) => Some(*bits),
+            Got::Event(_) => None,
+        })
+        .collect();
+    assert_eq!(lates, watch.sides);
 }
