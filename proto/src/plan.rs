@@ -14,6 +14,14 @@ use ssvr_core::recursion::Estimator32;
 use ssvr_core::stick_slip::{history_for_age, storage_for, StickSlipCoefficients, StickSlipConfig};
 use ssvr_core::{Error, FrictionLaw, Structure, StructureParams};
 
+/// The fixed-base model's history (samples). It pushes no event, so its estimator back-dates
+/// none: the history only sets how often the ring wraps, and each wrap costs two general
+/// updates (~400 M4F instructions) where the steady run stops. Measured under QEMU against the
+/// detector's `max_age + 2` (~190 samples at 10 kHz, ~160 at 1 kHz, 20 B a sample): 2 saved
+/// 3.2 KB of the board image's static RAM and cost +10.4 instructions per steady sample at
+/// 10 kHz; 66 saves ~1.9 KB and costs about 2 (docs/PERFORMANCE.md).
+pub const FIXED_BASE_HISTORY: usize = 66;
+
 /// The longest stick-slip history (samples) a plan may ask for: the host's storage.
 pub const MAX_HISTORY: usize = 2048;
 
@@ -101,7 +109,8 @@ pub struct Plan {
     /// The detector's longest back-dating with this ring (samples); the stick-slip model clamps
     /// older events to it.
     pub max_age: usize,
-    /// The stick-slip estimator's history: `max_age + 2`.
+    /// The stick-slip estimator's history: `max_age + 2`; at most [`FIXED_BASE_HISTORY`] for
+    /// the fixed-base model, which pushes no event.
     pub history: usize,
     /// The stick-slip estimator's storage that makes its steady state cheapest
     /// (`storage_for(history, identify_every)`).
@@ -152,7 +161,11 @@ impl Plan {
             let ring = d.min_ring();
             (DetectorPlan::Displacement(d), ring, d.max_age_samples(ring))
         };
-        let history = history_for_age(max_age);
+        let history = if model == ModelKind::FixedBase {
+            history_for_age(max_age).min(FIXED_BASE_HISTORY)
+        } else {
+            history_for_age(max_age)
+        };
         if history > MAX_HISTORY {
             return Err(PlanError::History(history));
         }
@@ -663,7 +676,12 @@ mod tests {
                 assert_eq!(q.rest_samples as f64, (0.5 * rate).floor());
                 assert!(!q.stick_slip.identify_mu && q.stick_slip.observer_bandwidth == 0.0);
                 assert_ne!(q.digest(), p.digest());
-                assert_eq!(p.history, p.max_age + 2);
+                let want = if m == ModelKind::FixedBase {
+                    (p.max_age + 2).min(FIXED_BASE_HISTORY)
+                } else {
+                    p.max_age + 2
+                };
+                assert_eq!(p.history, want);
                 assert!(p.storage > p.history);
                 assert!(p.ring.is_power_of_two());
             }
