@@ -130,28 +130,46 @@ fn dropped_frames_at_the_boards_rate_change_no_event() {
     }
 }
 
-/// At 2 kHz the fuse rows unperturbed and told f 5 % off meet the fuse goals on every scene
-/// (RMS ≤ 0.3 %, max ≤ 2 % of the peak). El Centro's jump breakaways (μs > μ) are confirmed
-/// early, not at their fourth sample: its max went 2.37 → 1.59 %. The wide sliding observer
-/// is capped at 0.1 rad per sample there instead of off: f ± 5 % went from max 3.25 / 3.52 %
-/// (default) and 6.0 / 7.0 % (Table 2 test 2) to 1.37 / 1.28 % and 0.69 / 0.82 %. Measured RMS /
-/// max: default 0.069 / 0.53 %, f ± 5 % 0.141 / 1.37, 0.143 / 1.28; El Centro 0.087 / 1.59,
-/// 0.088 / 1.59 (both); Table 2 test 2 0.042 / 0.17, 0.063 / 0.69, 0.066 / 0.82.
-#[test]
-fn the_fuse_rows_told_f_5_percent_off_meet_the_goals_at_2_khz() {
-    let rows = scorecard_rows(&["--rate-hz", "2000", "--only", "f+5,f-5", "--mode", "fuse"]);
-    let rows = &rows;
-    assert_eq!(rows.len(), 9, "3 scenes × (none, f+5%, f-5%)");
-    for r in rows {
+/// The fuse rows unperturbed and told f off, at `rate` Hz, every scene: each meets the fuse goals
+/// (RMS ≤ 0.3 %, max ≤ 2 % of the peak) within `rms_max` / `max_max` % of the peak, no event
+/// missed or invented.
+fn fuse_rows_told_f_off(rate: &str, only: &str, rms_max: f64, max_max: f64) {
+    let rows = scorecard_rows(&["--rate-hz", rate, "--only", only, "--mode", "fuse"]);
+    assert_eq!(rows.len(), 9, "3 scenes × (none, f+, f−)");
+    for r in &rows {
         let (rms, max) = (
             r["rms_pct_of_peak"].as_f64().unwrap(),
             r["max_pct_of_peak"].as_f64().unwrap(),
         );
-        assert!(rms <= 0.16 && max <= 1.75, "{r}");
+        assert!(rms.is_finite() && max.is_finite(), "{r}");
+        assert!(rms <= rms_max && max <= max_max, "{r}");
         assert_eq!(r["goal_met"], true, "{r}");
         assert_eq!(
             (r["missed"].as_u64(), r["false_events"].as_u64()),
             (Some(0), Some(0))
         );
     }
+}
+
+/// At 2 kHz the fuse rows unperturbed and told f 5 % off meet the fuse goals on every scene.
+/// El Centro's jump breakaways (μs > μ) are confirmed early, not at their fourth sample: its max
+/// went 2.37 → 1.59 %. The wide sliding observer is capped there instead of off: f ± 5 % went
+/// from max 3.25 / 3.52 % (default) and 6.0 / 7.0 % (Table 2 test 2) to 1.37 / 1.28 % and 0.69 /
+/// 0.82 % capped at 0.1 rad per sample, 0.55 / 0.59 % and 0.59 / 0.71 % at 0.5. Measured RMS /
+/// max: default 0.071 / 0.53 %, f ± 5 % 0.096 / 0.55, 0.100 / 0.59; El Centro 0.083 / 0.79,
+/// 0.084 / 0.79 (both); Table 2 test 2 0.042 / 0.18, 0.056 / 0.59, 0.061 / 0.71.
+#[test]
+fn the_fuse_rows_told_f_5_percent_off_meet_the_goals_at_2_khz() {
+    fuse_rows_told_f_off("2000", "f+5,f-5", 0.11, 0.85);
+}
+
+/// At the board's 1 kHz the fuse rows unperturbed and told f 8 % off meet the fuse goals on
+/// every scene, with the wide sliding observer capped at 0.5 rad per sample (0.1 before: the
+/// default scene's f ± 8 % 0.60 / 5.47 % and 0.63 / 5.12 %, Table 2 test 2's 0.31 / 2.34 % and
+/// 0.34 / 2.18 %, RMS / max of the peak). Measured: default 0.206 / 1.91 %, f ± 8 % 0.249 /
+/// 1.91, 0.257 / 1.91; El Centro 0.131 / 1.83, 0.139 / 1.83 (both); Table 2 test 2 0.111 / 0.47,
+/// 0.176 / 1.36, 0.218 / 1.53.
+#[test]
+fn the_fuse_rows_told_f_8_percent_off_meet_the_goals_at_1_khz() {
+    fuse_rows_told_f_off("1000", "f+8,f-8", 0.27, 1.95);
 }
