@@ -131,7 +131,7 @@ pub struct Plan {
 }
 
 /// Version of the word layout ([`Plan::to_words`]).
-pub const WORDS_VERSION: u32 = 7;
+pub const WORDS_VERSION: u32 = 8;
 /// Length of a plan's words.
 pub const WORDS: usize = 52 + COEFFICIENT_WORDS;
 
@@ -148,8 +148,10 @@ impl Plan {
         Estimator32::new(&structure, rate)?;
         let (detector, ring, max_age) = if model.detects_on_acceleration() {
             // The kinetic friction a slide starts with: μ_slow under a velocity-dependent law.
+            // (Fuse mode, the plan's first: `with_mode`.)
             let d = PhaseDetectorConfig::for_noise(s.accel_noise_rms_m_s2)?
-                .with_friction(s.static_friction_coefficient, s.friction.at_rest(mu));
+                .with_friction(s.static_friction_coefficient, s.friction.at_rest(mu))
+                .with_early_ramp_starts(true);
             (
                 DetectorPlan::SlipAcceleration(d),
                 d.min_ring(),
@@ -202,6 +204,11 @@ impl Plan {
     /// ([`BaseTuning`](crate::model::BaseTuning), docs/ROBUSTNESS.md).
     pub fn with_mode(mut self, mode: Mode) -> Self {
         self.mode = mode;
+        // (Fuse mode: a strong ramp breakaway confirmed at its second sample, its slide's
+        // friction from the breakaway read on the measured top.)
+        if let DetectorPlan::SlipAcceleration(d) = &mut self.detector {
+            d.early_ramp_starts = mode == Mode::Fuse;
+        }
         if mode == Mode::Predict {
             self.stick_slip.identify_mu = false;
             self.stick_slip.use_identified_mu = false;
@@ -331,7 +338,7 @@ impl Plan {
                 w.usize(d.confirm_samples);
                 w.usize(d.search_samples);
                 w.usize(d.stall_samples);
-                w.u32(d.jump_breakaway as u32);
+                w.u32(d.jump_breakaway as u32 | (d.early_ramp_starts as u32) << 1);
             }
         }
         w.usize(self.ring);
@@ -403,7 +410,8 @@ impl Plan {
         let a = r.usize();
         let b = r.usize();
         let c = r.usize();
-        let flag = r.u32() != 0;
+        let flags = r.u32();
+        let flag = flags & 1 != 0;
         let detector = match kind {
             0 => DetectorPlan::Displacement(DetectorConfig {
                 hysteresis_m: f32::from_bits(x),
@@ -417,6 +425,7 @@ impl Plan {
                 search_samples: b,
                 stall_samples: c,
                 jump_breakaway: flag,
+                early_ramp_starts: flags & 2 != 0,
             }),
             _ => return Err(PlanError::Words),
         };
@@ -675,6 +684,13 @@ mod tests {
                 assert_eq!(Plan::from_words(&q.to_words()), Ok(q), "{m:?} at {rate} Hz");
                 assert_eq!(q.rest_samples as f64, (0.5 * rate).floor());
                 assert!(!q.stick_slip.identify_mu && q.stick_slip.observer_bandwidth == 0.0);
+                // Strong ramp starts confirmed early in fuse mode only, and back with it.
+                if let (DetectorPlan::SlipAcceleration(f), DetectorPlan::SlipAcceleration(r)) =
+                    (p.detector, q.detector)
+                {
+                    assert!(f.early_ramp_starts && !r.early_ramp_starts, "{m:?}");
+                    assert_eq!(q.with_mode(Mode::Fuse).detector, p.detector);
+                }
                 assert_ne!(q.digest(), p.digest());
                 let want = if m == ModelKind::FixedBase {
                     (p.max_age + 2).min(FIXED_BASE_HISTORY)
