@@ -12,8 +12,8 @@
 //!   (default) | `predict`, with the host's own code
 //!   (`ssvr_proto::Plan::new`), and the planned input's start `SSVR_PLANNED_START`
 //!   (`accel,rise`, two f32s' bits in hex, or `none`, as `host-sim qemu` passes it; unset or
-//!   empty: the scene file's own input, if it is a whole scene; kept for a predict-mode plan
-//!   without a rest only, `Plan::with_planned_start`). Writes `OUT_DIR/plan.rs`: the plan's words and digest, the
+//!   empty: the scene file's own input, if it is a whole scene; kept for a plan without a rest
+//!   only, `Plan::with_planned_start`). Writes `OUT_DIR/plan.rs`: the plan's words and digest, the
 //!   detector's ring, the stick-slip storage, and the model's and detector's types (only that
 //!   model's code is compiled in).
 //! * Board image: also `OUT_DIR/scene_board.rs`: the integer TIM2 rate, the ADC configuration and
@@ -104,7 +104,7 @@ fn main() {
         .with_mode(mode)
         .with_rest(specimen.start_s);
     // The planned input's start, as the host plans it (`host_sim::pipeline::plan_for_mode`:
-    // predict mode without a rest only): `SSVR_PLANNED_START` (host-sim's builds: the two f32s'
+    // without a rest only): `SSVR_PLANNED_START` (host-sim's builds: the two f32s'
     // bits in hex, `accel,rise`, or `none`), else the scene file's own input (a whole scene: the
     // default table1.toml; a specimen file, as host-sim writes, has none), else none.
     println!("cargo:rerun-if-env-changed=SSVR_PLANNED_START");

@@ -28,8 +28,8 @@ pub fn plan_for(scene: &Scene, model: ModelKind) -> Result<Plan> {
 }
 
 /// The plan of a scene, a model and a mode (with the scene's rest before the input, whose
-/// accelerometer readings the pipeline zeroes, and, predict mode without a rest, its planned
-/// input's start).
+/// accelerometer readings the pipeline zeroes, and, without a rest, its planned input's
+/// start).
 pub fn plan_for_mode(scene: &Scene, model: ModelKind, mode: Mode) -> Result<Plan> {
     let input = scene.input_motion();
     Ok(

@@ -124,9 +124,9 @@ pub struct Plan {
     /// Samples of rest before the input (the planned input's start): the accelerometers are
     /// zeroed on them ([`crate::zeroing`]).
     pub rest_samples: u32,
-    /// The planned table acceleration's line at the input's start ([`PlannedStart`]): predict
-    /// mode without a rest takes the table accelerometer's offset as the measured line's
-    /// intercept less its. `None`: not planned (a replay), or not used (fuse mode, a rest).
+    /// The planned table acceleration's line at the input's start ([`PlannedStart`]): a plan
+    /// without a rest (either mode) takes the table accelerometer's offset as the measured
+    /// line's intercept less its. `None`: not planned (a replay), or not used (a rest).
     pub planned_start: Option<PlannedStart>,
 }
 
@@ -236,9 +236,9 @@ impl Plan {
     }
 
     /// This plan with its planned table acceleration `accel(t)` (m/s², t in s from the input's
-    /// start): [`Self::planned_start`] ([`planned_start`]) for a predict-mode plan without a
-    /// rest, the only one that uses it (none for the others, whose digests and images then do
-    /// not depend on the input). Call it after [`Self::with_mode`] and [`Self::with_rest`].
+    /// start): [`Self::planned_start`] ([`planned_start`]) for a plan without a rest, the only
+    /// one that uses it (none for the others, whose digests and images then do not depend on
+    /// the input). Call it after [`Self::with_mode`] and [`Self::with_rest`].
     pub fn with_planned_input(self, accel: impl Fn(f64) -> f64) -> Self {
         let planned = if self.uses_planned_start() {
             planned_start(
@@ -253,8 +253,8 @@ impl Plan {
     }
 
     /// This plan with the planned start `planned` (as [`Self::with_planned_input`] computes
-    /// it; the firmware's build gets it so from the host): kept for a predict-mode plan without
-    /// a rest only, and when finite. [`Self::with_mode`] and [`Self::with_rest`] drop it when
+    /// it; the firmware's build gets it so from the host): kept for a plan without a rest only,
+    /// and when finite. [`Self::with_mode`] and [`Self::with_rest`] drop it when
     /// the plan no longer uses it.
     pub fn with_planned_start(mut self, planned: Option<PlannedStart>) -> Self {
         let uses = self.uses_planned_start();
@@ -263,9 +263,11 @@ impl Plan {
         self
     }
 
-    /// Whether the plan uses a planned start: predict mode without a rest.
+    /// Whether the plan uses a planned start: without a rest, either mode (fuse mode had none
+    /// before the fifteenth session: its table offset then stayed in the model as b_t/35 until
+    /// the sliding phases, docs/ROBUSTNESS.md).
     fn uses_planned_start(&self) -> bool {
-        self.mode == Mode::Predict && self.rest_samples == 0
+        self.rest_samples == 0
     }
 
     /// Whether the pipeline identifies the table accelerometer's gain against the displacement
@@ -580,8 +582,8 @@ mod tests {
 
     /// The planned start: the least-squares line through the planned input's first
     /// `open_start_samples` samples; exact for a line, within A·(ω·T)³/30 of 0 for a sine from
-    /// rest (T the start's length), carried by the words; only in a predict-mode plan without a
-    /// rest; `None` without a plan.
+    /// rest (T the start's length), carried by the words; only in a plan without a rest
+    /// (either mode); `None` without a plan.
     #[test]
     fn the_plan_carries_the_planned_start() {
         let plan = Plan::new(specimen(10_000.0), ModelKind::StickSlip)
@@ -605,11 +607,18 @@ mod tests {
                 "{bad:?}"
             );
         }
-        // A later `with_rest` or `with_mode` drops it; `with_planned_start` keeps the rule.
+        // A later `with_rest` drops it, `with_mode` keeps it (fuse mode without a rest uses
+        // it too); `with_planned_start` keeps the rule.
         assert_eq!(line.with_rest(0.5).planned_start, None);
-        assert_eq!(line.with_mode(Mode::Fuse).planned_start, None);
+        assert_eq!(line.with_mode(Mode::Fuse).planned_start, Some(p));
         let fuse = Plan::new(specimen(10_000.0), ModelKind::StickSlip).unwrap();
-        assert_eq!(fuse.with_planned_start(Some(p)).planned_start, None);
+        assert_eq!(fuse.with_planned_start(Some(p)).planned_start, Some(p));
+        assert_eq!(
+            fuse.with_rest(0.5)
+                .with_planned_start(Some(p))
+                .planned_start,
+            None
+        );
         // 2 m/s² at 7 Hz from rest: the start is 22 samples (0.1 rad of p), ω·T = 0.097.
         let w = 2.0 * core::f64::consts::PI * 7.0;
         let sine = plan.with_planned_input(|t| 2.0 * libm::sin(w * t));
@@ -618,10 +627,10 @@ mod tests {
         assert_eq!(n, 22);
         let bound = 2.0 * libm::pow(w * n as f64 / 10_000.0, 3.0) / 30.0;
         assert!((a as f64).abs() < 1.5 * bound, "{a} against {bound}");
-        // Only predict mode without a rest; no start at 500 Hz (10 samples would span 0.88 rad
-        // of p), 10 samples at 2 kHz; none for a planned input that is not finite.
+        // Only without a rest; no start at 500 Hz (10 samples would span 0.88 rad of p), 10
+        // samples at 2 kHz; none for a planned input that is not finite.
         let fuse = Plan::new(specimen(10_000.0), ModelKind::StickSlip).unwrap();
-        assert_eq!(fuse.with_planned_input(|_| 1.0).planned_start, None);
+        assert!(fuse.with_planned_input(|_| 1.0).planned_start.is_some());
         let rest = plan.with_rest(0.5);
         assert_eq!(rest.with_planned_input(|_| 1.0).planned_start, None);
         let coarse = |rate| {

@@ -1,6 +1,5 @@
 //! The planned input's start ([`PlannedStart`]): the least-squares line through the planned
-//! table acceleration over the input's first samples, which a predict-mode plan without a rest
-//! carries ([`Plan::planned_start`](crate::Plan::planned_start)) and against which the table
+//! table acceleration over the input's first samples, which a plan without a rest carries ([`Plan::planned_start`](crate::Plan::planned_start)) and against which the table
 //! accelerometer's offset is found
 //! ([`BaseTuning::note_table_start`](crate::model::BaseTuning::note_table_start)); its text
 //! form for the firmware's build (`SSVR_PLANNED_START`).

@@ -1,5 +1,5 @@
 //! The table accelerometer's offset from the input's start against the plan, allowing for the
-//! table's lag ([`start_offset`]): predict mode without a rest
+//! table's lag ([`start_offset`]): either mode without a rest
 //! ([`BaseTuning::note_table_start`](crate::model::BaseTuning::note_table_start)).
 //!
 //! Over the input's first samples (the open-loop start,

@@ -334,9 +334,10 @@ impl Reference {
                         b.note_open_start(&[top as f32], &[y as f32]);
                     }
                     b.push_run(&[base], &[top as f32]);
-                    // (Predict mode without a rest: the table's start, for its offset, its
-                    // flagged samples left out, and the model's response to it so far.)
-                    if *predict && b.open_start() > 0 {
+                    // (Without a rest, with a planned start: the table's start, for its
+                    // offset, its flagged samples left out, and the model's response to it so
+                    // far.)
+                    if b.open_start() > 0 {
                         let t = if valid { table } else { f32::NAN };
                         if let Some((off, intervals)) = b.note_table_start(&[t]) {
                             est.remove_input_offset(f64::from(off), intervals);

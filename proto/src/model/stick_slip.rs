@@ -508,9 +508,7 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
         if let Some(t) = &mut self.tuning {
             t.push_run(measured, base);
         }
-        if !fuse {
-            table_start(bt, &mut self.est, table, frames);
-        }
+        table_start(bt, &mut self.est, table, frames);
         self.after_run(n, level);
     }
 
@@ -579,7 +577,8 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
     }
 }
 
-/// Predict mode's table start over a run's `table` inputs, its flagged samples left out
+/// The table's start (either mode without a rest, with a planned start) over a run's `table`
+/// inputs, its flagged samples left out
 /// ([`BaseTuning::note_table_start`]): an offset found at its end is removed from the next run
 /// on (as from the next sample one at a time), and the model's response to it so far from the
 /// estimator's state. Out of line: it runs on the run's first samples only.

@@ -133,15 +133,17 @@ pub struct BaseTuning {
     /// Fuse mode: only the offsets (the top accelerometer's from `top_fit`) and M.
     fuse: bool,
     zeroed: bool,
-    /// The table's offset is known: zeroed on a rest, or found at predict mode's table start
+    /// The table's offset is known: zeroed on a rest, or found at the table's start
     /// (a fit from one direction of sliding then takes the offset in use as right).
     offset_known: bool,
     /// μ is known from both directions (adopted, or the one in use confirmed).
     mu_known: bool,
     id: SlidingIdentifier<f32>,
-    /// Without a rest, the first samples ([`OpenStart`]): fuse mode's top offset, predict mode's
-    /// table offset.
+    /// Without a rest, the first samples ([`OpenStart`]): fuse mode's top offset (none in
+    /// predict mode),
     start: OpenStart,
+    /// and, with a planned start, the table's offset against it (either mode).
+    table_start: OpenStart,
     /// The blocks waiting for late events (`at`: the slot of the next, `filled` of them), in
     /// the first `wait` slots: the blocks that cover the detector's longest delay.
     ring: [Block; BLOCKS],
@@ -262,14 +264,19 @@ impl BaseTuning {
             top_offset: 0.0,
             top_offset_std_use: 0.0,
             start: {
-                // (Predict mode's is armed by a planned start: `with_planned_start`.)
                 let mut start = OpenStart::new(!zeroed, &params, rate);
                 if !fuse {
                     start.off();
-                    // (The table's statistics over its first samples only: every whole lag
-                    // of the table is tried over them, `table_start::LAGS`.)
-                    start.keep_first(crate::table_start::LAGS as u32 - 1);
                 }
+                start
+            },
+            table_start: {
+                // (Armed by a planned start: `with_planned_start`.)
+                let mut start = OpenStart::new(!zeroed, &params, rate);
+                start.off();
+                // (The table's statistics over its first samples only: every whole lag of the
+                // table is tried over them, `table_start::LAGS`.)
+                start.keep_first(crate::table_start::LAGS as u32 - 1);
                 start
             },
             top_scale: 1.0,
@@ -290,12 +297,10 @@ impl BaseTuning {
             Some(p) => (p.accel_m_s2, p.rise_per_sample_m_s2),
             None => (f32::NAN, 0.0),
         };
-        if !self.fuse {
-            if self.planned_start.is_finite() && self.planned_rise.is_finite() {
-                self.start.arm();
-            } else {
-                self.start.off();
-            }
+        if self.planned_start.is_finite() && self.planned_rise.is_finite() {
+            self.table_start.arm();
+        } else {
+            self.table_start.off();
         }
         self
     }

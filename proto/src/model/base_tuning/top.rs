@@ -57,11 +57,12 @@ pub const LEVEL_SIGMAS: f64 = 5.0;
 /// (no stuck-phase observer: its prediction does not follow the measurement) for those samples,
 /// and the mean of measured − predicted is b_top, to the sensor noise over √n
 /// (n = 22 at 7 Hz and 10 kHz). The model's error in f or ξ is a fraction (p·t)² of the top's
-/// small response then, and the table's offset is left to the stuck-phase observer as before.
-/// A start that is not at rest shows a trend in the residual and gives no offset
-/// ([`LEVEL_SIGMAS`]). Predict mode without a rest runs the same start on the measured table
-/// acceleration against the planned input's line, for a table any lag late, gives the table's
-/// offset ([`BaseTuning::note_table_start`], [`crate::table_start`]).
+/// small response then. A start that is not at rest shows a trend in the residual and gives no
+/// offset ([`LEVEL_SIGMAS`]). Without a rest and with a planned start, either mode runs the
+/// same start on the measured table acceleration against the planned input's line, for a table
+/// any lag late, which gives the table's offset ([`BaseTuning::note_table_start`],
+/// [`crate::table_start`]); without one (a replay), fuse mode leaves the table's offset to the
+/// stuck-phase observer (κ·b_t ≈ b_t/35 stays) until the sliding phases separate the two.
 #[derive(Debug, Clone)]
 pub(super) struct OpenStart {
     /// Samples of the start still to come (0: none, or done); its length.
@@ -303,7 +304,7 @@ impl OpenStart {
         (level && plausible && sd > 0.0 && libm::fabs(b) > 3.0 * sd).then_some((b, sd))
     }
 
-    /// Predict mode's table start: the table accelerometer's offset and its standard
+    /// The table's start: the table accelerometer's offset and its standard
     /// deviation from the least-squares line through the measured table acceleration against
     /// the `planned` line (its value at the input's first sample and its `rise` per sample: the
     /// same fit through the planned input, so a record's first acceleration and the line's miss
@@ -357,7 +358,7 @@ pub fn open_start_samples(params: &StructureParams, rate: f64) -> u32 {
 /// the largest the goals cover ([`BaseTuning::adopt_top`]).
 pub const UNKNOWN_TABLE_OFFSET_SD: f64 = 0.05 * 9.80665;
 
-/// Largest table offset predict mode's table start takes (m/s²): 0.1 g, twice the largest a lab
+/// Largest table offset the table's start takes (m/s²): 0.1 g, twice the largest a lab
 /// accelerometer is expected to show (a table that does not follow the plan at its start is
 /// not taken for an offset beyond it).
 pub const MAX_TABLE_START_OFFSET: f64 = 0.1 * 9.80665;
@@ -386,7 +387,7 @@ impl BaseTuning {
     /// [`Self::note_table_start`]).
     #[inline(always)]
     pub fn open_start(&self) -> usize {
-        self.start.left() as usize
+        self.start.left().max(self.table_start.left()) as usize
     }
 
     /// The open-loop start's `measured` top accelerations and the model's predictions `pred` of
@@ -405,8 +406,8 @@ impl BaseTuning {
         }
     }
 
-    /// Predict mode without a rest: the run's first [`Self::open_start`] samples of the table
-    /// acceleration `table` (the model's input, before any offset is removed; NaN: a missing or
+    /// Either mode without a rest, with a planned start: the run's first [`Self::open_start`]
+    /// samples of the table acceleration `table` (the model's input, before any offset is removed; NaN: a missing or
     /// flagged sample). At the start's end, a table offset found is taken as the offset in use,
     /// known from then on: it is removed from the base's samples before the sliding
     /// identification, whose fits from one direction of sliding then give μ itself instead of μ
@@ -416,17 +417,17 @@ impl BaseTuning {
     /// [`StickSlipEstimator::remove_input_offset`](ssvr_core::stick_slip::StickSlipEstimator::remove_input_offset).
     #[inline(never)]
     pub fn note_table_start(&mut self, table: &[f32]) -> Option<(f32, u32)> {
-        if !self.start.note(table, None) {
+        if !self.table_start.note(table, None) {
             return None;
         }
         let (b, sd) = self
-            .start
+            .table_start
             .line_offset(self.planned_start as f64, self.planned_rise as f64)?;
         self.offset = b as f32;
         self.id_shift = self.offset;
         self.offset_std_use = sd;
         self.offset_known = true;
-        Some((self.offset, self.start.len().saturating_sub(1)))
+        Some((self.offset, self.table_start.len().saturating_sub(1)))
     }
 
     /// Fuse mode: the top accelerometer's offset and gain (relative to the base's) from the
