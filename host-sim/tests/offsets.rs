@@ -359,12 +359,16 @@ fn predict_allows_for_the_tables_lag() {
 /// every accelerometer 0.05 g off without a rest, the first 2 s of the default scene and of El
 /// Centro. Fuse mode takes the top's offset from it, the model's response to the table's
 /// offset fitted beside it; both modes take the table's against the plan (fuse mode since the
-/// fifteenth session). Measured, % RMS, fuse / predict: default 0.146 / 0.280 (no offsets:
-/// 0.193 / 0.275; fuse 0.491 while it left the table's offset to the stuck-phase observer),
-/// El Centro 0.177 / 1.002 (0.206 / 0.232; fuse 0.658 before; El Centro's record starts at a0 =
-/// 0.06 m/s², which leaves the table's offset a0/2 off, as at 10 kHz: predict mode carries it,
-/// fuse mode's stuck-phase observer follows the top); before, with no start: 4.73 / 6.54 and
-/// 19.8 / 20.2. No event missed or invented.
+/// fifteenth session), provisionally from the start's first sample on (its 10 samples span
+/// 0.44 rad: `BaseTuning::begin_table_start`). Measured, % RMS, fuse / predict: default 0.125 /
+/// 0.268 (no offsets: 0.193 / 0.275; 0.146 / 0.280 without the provisional offset, fuse 0.491
+/// while it left the table's offset to the stuck-phase observer), El Centro 0.160 / 0.999
+/// (0.206 / 0.232; 0.177 / 1.002 without the provisional offset, fuse 0.658 before; El Centro's
+/// record starts at a0 = 0.06 m/s², which leaves the table's offset a0/2 off, as at 10 kHz:
+/// predict mode carries it, fuse mode's stuck-phase observer follows the top); before, with no
+/// start: 4.73 / 6.54 and 19.8 / 20.2. Fuse mode's max: default 0.496 %, El Centro 1.53 % (2.14
+/// and 2.26 % without the provisional offset: the model integrated the table's offset over the
+/// start). No event missed or invented.
 #[test]
 fn a_1_khz_run_finds_the_offsets_at_its_start() {
     let g = 0.49;
@@ -375,15 +379,24 @@ fn a_1_khz_run_finds_the_offsets_at_its_start() {
         s
     };
     let cases = [
-        ("default", at_1_khz(scene([0.0; 3], 0.0, 0.0)), [0.16, 0.30]),
-        ("El Centro", at_1_khz(elcentro_2s()), [0.19, 1.07]),
+        (
+            "default",
+            at_1_khz(scene([0.0; 3], 0.0, 0.0)),
+            [0.14, 0.29],
+            0.55,
+        ),
+        ("El Centro", at_1_khz(elcentro_2s()), [0.17, 1.03], 1.65),
     ];
-    for (name, s, rms) in cases {
+    for (name, s, rms, fuse_max) in cases {
         for (mode, rms) in [Mode::Fuse, Mode::Predict].into_iter().zip(rms) {
             let out = go(&s, mode);
             let e = &out.report.estimator;
             let r = e.rms_err_pct_of_peak;
             assert!(r < rms, "{name} {mode:?}: {r} % RMS");
+            if mode == Mode::Fuse {
+                let max = e.max_err_pct_of_peak;
+                assert!(max < fuse_max, "{name}: {max} % max");
+            }
             assert_eq!(out.report.detection.missed, 0, "{name} {mode:?}");
             assert_eq!(out.report.detection.false_, 0, "{name} {mode:?}");
         }

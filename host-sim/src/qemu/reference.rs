@@ -320,6 +320,9 @@ impl Reference {
                     } else {
                         f32::NAN
                     };
+                    // (Without a rest, with a planned start: the table's offset from the start's
+                    // first sample, provisionally.)
+                    b.begin_table_start(if valid { table } else { f32::NAN });
                     // (Fuse mode without a rest: the open-loop start, for the top offset.)
                     let open = !*predict && b.open_start() > 0;
                     let y_in = if *predict {

@@ -488,6 +488,14 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
         {
             (*y, *u) = (m, t);
         }
+        // (The table's offset from the start's first sample, provisionally.)
+        if let (Some(&t), Some(f)) = (table.first(), frames.first()) {
+            bt.begin_table_start(if f.flags & flags::ACCEL_UNUSABLE == 0 {
+                t
+            } else {
+                f32::NAN
+            });
+        }
         if let (Some(y), Some(u)) = (top.get_mut(..n), u.get_mut(..n)) {
             bt.inputs_in_place(u, y, base, level);
         }
