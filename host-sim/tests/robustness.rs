@@ -103,7 +103,10 @@ fn scorecard_rows(args: &[&str]) -> Vec<Value> {
 /// frame in a slide used to read as a reversal there (its linear fill has no curvature, and the
 /// jump test judged the next sample against it): 2 missed and 2 invented events on the default
 /// scene, 13.4 % RMS of the peak (fuse) and 13.6 % (predict). Measured now (fuse / predict):
-/// default 0.193 / 0.330 %, El Centro 0.165 / 0.809 %, Table 2 test 2 0.094 / 0.366 %.
+/// default 0.148 / 0.322 %, El Centro 0.131 / 0.802 %, Table 2 test 2 0.095 / 0.368 %. Fuse
+/// mode's rows meet their goals, max 1.57 / 1.83 / 0.45 %: El Centro's was 4.86 % while the
+/// jump test of a sample whose two before it were measured still took the gap's n (a frame
+/// dropped four samples before a stick: the stick's jump waited ten samples for the stall rule).
 #[test]
 fn dropped_frames_at_the_boards_rate_change_no_event() {
     let rows = scorecard_rows(&["--rate-hz", "1000", "--only", "dropout"]);
@@ -125,8 +128,12 @@ fn dropped_frames_at_the_boards_rate_change_no_event() {
         assert_eq!(r["matched"], none["matched"], "{r}");
         assert_eq!(r["missed"], 0, "{r}");
         assert_eq!(r["false_events"], 0, "{r}");
-        let bound = if r["mode"] == "fuse" { 0.23 } else { 0.95 };
+        let bound = if r["mode"] == "fuse" { 0.16 } else { 0.85 };
         assert!(rms <= bound, "{rms} > {bound}: {r}");
+        if r["mode"] == "fuse" {
+            let max = r["max_pct_of_peak"].as_f64().unwrap();
+            assert!(max <= 1.9 && r["goal_met"] == true, "{r}");
+        }
     }
 }
 
