@@ -47,11 +47,6 @@ pub use slip_start::{START_LINE_SAMPLES, START_PARABOLA_SAMPLES};
 /// of the friction force.
 const JUMP_THRESHOLDS: f32 = 3.0;
 
-/// A ramp breakaway confirmed early ([`PhaseDetectorConfig::early_ramp_starts`]) has its second
-/// sample at least this many times its first (a ramp from zero: twice or more, less the
-/// curvature; a jump: about once).
-const RAMP_GROWTH: f32 = 1.5;
-
 /// The stall rule's velocity bound: this many times `stall_samples` × threshold (m/s² × samples).
 const STALL_VELOCITY: f32 = 8.0;
 
@@ -61,11 +56,6 @@ const STALL_FORCE: usize = 8;
 
 /// … plus this many times the magnitudes of s̈'s last second and third differences.
 const CURVATURES: f32 = 4.0;
-
-/// A jump breakaway whose first two samples are this many thresholds is confirmed at its
-/// second ([`PhaseDetector`]'s `strong_start`): 20 × 6σ√2 ≈ 170 σ of a sample's noise; so is a
-/// ramp breakaway whose second sample is (with [`PhaseDetectorConfig::early_ramp_starts`]).
-const STRONG_JUMP: f32 = 20.0;
 
 /// Detector settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -545,34 +535,6 @@ impl<const N: usize> PhaseDetector<N> {
             || self.in_band >= STALL_FORCE.saturating_mul(self.cfg.max_age_samples())
     }
 
-    /// A slip start confirmed early, at its second sample `k` (`along`: its s̈ towards the
-    /// slide): a jump breakaway (expected: `jump_breakaway`) whose two samples are at least
-    /// [`STRONG_JUMP`] thresholds, or (`early_ramp_starts`) a ramp breakaway whose second one
-    /// is; the sample before the first within one, all three measured (a fill continues a
-    /// line). Its
-    /// sliding side, the parabola through its first three samples, comes a sample later
-    /// ([`Self::late_slip_start_accel`]): the line through two put predict mode's M 1.35 % off
-    /// on El Centro at 1 kHz. A burst of two such samples and nothing after them, which a
-    /// fourth sample would reject as a spike, is taken for a slip start: ~170 σ twice running
-    /// is a fault of the sensor, not noise.
-    #[inline]
-    fn strong_start(&self, p: u64, k: u64, along: f32) -> bool {
-        let strong = STRONG_JUMP * self.cfg.threshold_m_s2;
-        let first_strong = if self.cfg.jump_breakaway {
-            libm::fabsf(self.at(p)) >= strong
-        } else {
-            // (A ramp's second sample is at least twice its first, less its curvature; an
-            // unexpected jump's is about its first: it waits for its fourth, whose sliding
-            // side gives its slide's friction, not the breakaway's μs.)
-            self.cfg.early_ramp_starts && along >= RAMP_GROWTH * libm::fabsf(self.at(p))
-        };
-        k == p + 1
-            && along >= strong
-            && first_strong
-            && libm::fabsf(self.at(p - 1)) < self.cfg.threshold_m_s2
-            && self.missing_mask(k) & 0b111 == 0
-    }
-
     /// A stuck sample (`measured`: not a fill, which only counts towards a pending slip start's
     /// confirmation, as its last sample after measured ones: a noise spike and the fills
     /// continuing it are no slip start): watch for s̈ leaving zero; confirm and time the slip
@@ -683,152 +645,6 @@ mod tests {
             SlipEvent::Reversal { direction: -1, .. }
         ));
         assert!((events[1].0 - (tb + ur)).abs() < 0.02, "{events:?}");
-    }
-
-    /// A strong jump breakaway (μs > μ told: `jump_breakaway`) is confirmed at its second
-    /// sample, not its fourth: at 1 kHz each sample the stuck phase's prediction runs on past
-    /// the start costs the top up to ~0.05 m/s² on El Centro. Its time is as good (within its
-    /// sample interval); its sliding side is NaN at the confirmation and comes a sample later,
-    /// the parabola through its first three samples (within 2e-3 m/s², as a fourth sample's
-    /// confirmation gives it at once). A jump below 20 thresholds, or a start not expected to
-    /// jump, waits for the fourth, and a lone spike of any size is no slip start.
-    #[test]
-    fn a_strong_jump_breakaway_is_confirmed_at_its_second_sample() {
-        let run = |cfg: PhaseDetectorConfig, jump: f64, spike: bool| {
-            let mut d = PhaseDetector::<64>::new(cfg).unwrap();
-            let tb = 50.4;
-            let mut found = None;
-            let mut side = None;
-            for k in 0..120u64 {
-                let u = k as f64 - tb;
-                let a = if spike {
-                    if k == 51 {
-                        jump
-                    } else {
-                        0.0
-                    }
-                } else if u > 0.0 {
-                    jump + 0.3 * u - 0.02 * u * u
-                } else {
-                    0.0
-                };
-                let pending = d.side_pending();
-                let event = d.process(a as f32);
-                if pending {
-                    assert!(!d.side_pending());
-                    side = Some(d.late_slip_start_accel() as f64);
-                } else {
-                    assert!(d.late_slip_start_accel().is_nan(), "{k}");
-                }
-                if let Some(e) = event {
-                    assert!(found.is_none(), "{e:?} at {k}");
-                    let start = k as f64 - e.age_samples() as f64;
-                    found = Some((k, start - tb));
-                    if !d.side_pending() {
-                        side = Some(d.slip_start_accel() as f64);
-                    } else {
-                        assert!(d.slip_start_accel().is_nan());
-                    }
-                }
-            }
-            // (Its sliding side against the signal's at the start found: a jump start is timed
-            // to its sample interval.)
-            found.map(|(k, x)| {
-                let at_start = jump + 0.3 * x - 0.02 * x * x;
-                (k, x, side.unwrap_or(f64::NAN) - at_start)
-            })
-        };
-        let cfg = PhaseDetectorConfig::for_noise(5e-3).unwrap();
-        let thr = f64::from(cfg.threshold_m_s2);
-        let jumps = cfg.with_friction(0.25, 0.2);
-        // First sample above the threshold: 51; confirmed at 52 (strong) or 54.
-        let (k, dt, side) = run(jumps, 8.75, false).unwrap();
-        assert_eq!(k, 52);
-        assert!(dt.abs() <= 0.5 && side.abs() < 2e-3, "{dt} {side}");
-        let (k4, dt4, side4) = run(jumps, 10.0 * thr, false).unwrap();
-        assert_eq!(k4, 54);
-        assert!(dt4.abs() <= 0.5 && side4.abs() < 2e-3, "{dt4} {side4}");
-        assert_eq!(
-            run(cfg, 8.75, false).unwrap().0,
-            54,
-            "not told to expect a jump"
-        );
-        assert_eq!(run(jumps, 100.0, true), None, "a spike");
-    }
-
-    /// With `early_ramp_starts` (fuse mode's plan), a ramp breakaway (μs = μ) whose second
-    /// sample above the threshold is at least 20 thresholds is confirmed there, not at its
-    /// fourth, its time as good (the ramp's fit over two samples: within 0.01 of a sample here,
-    /// 0.03 over four, whose curvature biases the ramp's fit more) and its sliding side a
-    /// sample later (the parabola through its first three at the start found: zero to the
-    /// slope times the time's error, 0.02 m/s²; 0.06 over four). At 1 kHz the default scene's smooth
-    /// starts reach 1.7 and 3.8 m/s² at their first two samples (threshold 0.042): the max
-    /// error of fuse mode there went 1.91 → 1.45 % of the peak. A slower ramp (10 kHz's) waits
-    /// for the fourth sample; so does a ramp without `early_ramp_starts` (predict mode's plan);
-    /// a lone spike is no slip start.
-    #[test]
-    fn a_strong_ramp_breakaway_is_confirmed_at_its_second_sample_in_fuse_mode() {
-        let run = |cfg: PhaseDetectorConfig, slope: f64, spike: bool| {
-            let mut d = PhaseDetector::<64>::new(cfg).unwrap();
-            let tb = 50.4;
-            let signal = |u: f64| slope * u - 0.02 * u * u;
-            let (mut found, mut side) = (None, None);
-            for k in 0..120u64 {
-                let u = k as f64 - tb;
-                let a = match (spike, k == 51, u > 0.0) {
-                    (true, true, _) => 2.0 * slope,
-                    (false, _, true) => signal(u),
-                    _ => 0.0,
-                };
-                let pending = d.side_pending();
-                let event = d.process(a as f32);
-                if pending {
-                    side = Some(d.late_slip_start_accel() as f64);
-                }
-                if let Some(e) = event {
-                    assert!(found.is_none(), "{e:?} at {k}");
-                    found = Some((k, k as f64 - e.age_samples() as f64 - tb));
-                    if !d.side_pending() {
-                        side = Some(d.slip_start_accel() as f64);
-                    }
-                }
-            }
-            found.map(|(k, dt)| (k, dt, side.unwrap_or(f64::NAN)))
-        };
-        let run_jump = |cfg: PhaseDetectorConfig, jump: f64| {
-            let mut d = PhaseDetector::<64>::new(cfg).unwrap();
-            (0..120u64)
-                .find(|&k| {
-                    let u = k as f64 - 50.4;
-                    let a = if u > 0.0 { jump + 0.3 * u } else { 0.0 };
-                    d.process(a as f32).is_some()
-                })
-                .unwrap_or(0)
-        };
-        let cfg = PhaseDetectorConfig::for_noise(5e-3).unwrap();
-        let early = cfg.with_early_ramp_starts(true);
-        // First sample above the threshold: 51 (0.6 of a sample into the ramp).
-        let (k, dt, side) = run(early, 2.0, false).unwrap();
-        let (k4, dt4, side4) = run(cfg, 2.0, false).unwrap();
-        // Measured: −0.0096 of a sample and −0.019 m/s² (early), −0.031 and −0.062 (fourth).
-        assert_eq!(k, 52);
-        assert!(dt.abs() < 0.012 && side.abs() < 0.025, "{dt} {side}");
-        assert_eq!(k4, 54, "predict mode's plan");
-        assert!(dt4.abs() < 0.035 && side4.abs() < 0.07, "{dt4} {side4}");
-        assert_eq!(run(early, 0.2, false).unwrap().0, 54, "a slow ramp");
-        assert_eq!(run(early, 2.0, true), None, "a spike");
-        // A first sample below 20 thresholds (0.59 m/s², the second 1.55): a ramp's is
-        // confirmed at its second, a jump breakaway keeps its own rule (both samples strong).
-        assert_eq!(run(early, 1.0, false).unwrap().0, 52);
-        let jumps = early.with_friction(0.25, 0.2);
-        assert_eq!(
-            run(jumps, 1.0, false).unwrap().0,
-            54,
-            "a jump's first below 20"
-        );
-        // A jump not expected (μs told equal to μ): its second sample about its first.
-        assert_eq!(run_jump(early, 8.75), 54, "an unexpected jump");
-        assert_eq!(run_jump(jumps, 8.75), 52, "an expected one");
     }
 
     /// Gaussian-ish noise (sum of 12 uniforms) from a fixed LCG: unit RMS.
