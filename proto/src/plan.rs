@@ -148,10 +148,8 @@ impl Plan {
         Estimator32::new(&structure, rate)?;
         let (detector, ring, max_age) = if model.detects_on_acceleration() {
             // The kinetic friction a slide starts with: μ_slow under a velocity-dependent law.
-            // (Fuse mode, the plan's first: `with_mode`.)
             let d = PhaseDetectorConfig::for_noise(s.accel_noise_rms_m_s2)?
-                .with_friction(s.static_friction_coefficient, s.friction.at_rest(mu))
-                .with_early_ramp_starts(true);
+                .with_friction(s.static_friction_coefficient, s.friction.at_rest(mu));
             (
                 DetectorPlan::SlipAcceleration(d),
                 d.min_ring(),
@@ -181,7 +179,7 @@ impl Plan {
             }
         }
         let coefficients = StickSlipCoefficients::<f32>::new(&structure, rate)?;
-        Ok(Self {
+        let plan = Self {
             model,
             specimen,
             detector,
@@ -194,7 +192,9 @@ impl Plan {
             mode: Mode::Fuse,
             rest_samples: 0,
             planned_start: None,
-        })
+        };
+        // (What a mode sets, set in one place.)
+        Ok(plan.with_mode(Mode::Fuse))
     }
 
     /// This plan in `mode`: [`Mode::Predict`] never reads the top accelerometer, so the

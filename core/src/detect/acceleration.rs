@@ -76,8 +76,8 @@ pub struct PhaseDetectorConfig {
     /// threshold when that one is at least 20 thresholds (~170 σ of the noise) and 1.5 times
     /// the first (a ramp's shape: a jump that was not expected, μs told equal to μ, waits for
     /// its fourth sample, whose sliding side gives the slide its μ), as a strong jump
-    /// breakaway is confirmed early, instead of at its `confirm_samples`th: at coarse rates a smooth start
-    /// reaches that within a sample (1.7 and 3.8 m/s² on the default scene at 1 kHz, against a
+    /// breakaway is confirmed early, instead of at its `confirm_samples`th: at coarse rates a
+    /// smooth start reaches that within a sample (1.7 and 3.8 m/s² on the default scene at 1 kHz, against a
     /// threshold of 0.042), while the model ran on in the stuck phase. Its sliding side comes
     /// a sample later and the slide's friction from its breakaway, which reads the measured
     /// top in fuse mode only: the plan sets it for fuse mode (`ssvr_proto`'s

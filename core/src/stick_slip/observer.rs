@@ -75,13 +75,12 @@ pub(super) fn sliding_observer_gain<T: Real, M: Transcendentals<T>>(
     let root_m = libm::sqrt(mp / p);
     let own_dt = root_m * p * c.dt.to_f64();
     let bp_dt = factor * own_dt;
-    // Only for a sliding oscillator that is underdamped (ζ√M < 1) and slow against the sample
-    // rate: placing the poles of a stiff or overdamped one (a nearly massless base) needs huge
-    // gains; it then runs open loop, as before the sliding observer. `capped`: a wide
-    // bandwidth beyond SLIDE_BANDWIDTH_MAX_PER_SAMPLE is allowed up to SLIDE_CAPPED_BANDWIDTH
-    // and capped there, for a sliding oscillator up to SLIDE_OSCILLATOR_MAX_PER_SAMPLE; else
-    // such a slide runs open loop too,
-    // and so does one with the narrow observer (the model known: capped, it let the noise and
+    // Only for a sliding oscillator that is underdamped (ζ√M < 1) and slow against the sample rate:
+    // placing the poles of a stiff or overdamped one (a nearly massless base) needs huge gains; it
+    // then runs open loop, as before the sliding observer. `capped`: a wide bandwidth beyond
+    // SLIDE_BANDWIDTH_MAX_PER_SAMPLE is allowed up to SLIDE_CAPPED_BANDWIDTH and capped there, for
+    // a sliding oscillator up to SLIDE_OSCILLATOR_MAX_PER_SAMPLE; else such a slide runs open loop
+    // too, and so does one with the narrow observer (the model known: capped, it let the noise and
     // the gains' errors in).
     let (slow, bp_dt) = if capped && wide {
         (

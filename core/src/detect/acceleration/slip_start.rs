@@ -33,16 +33,15 @@ pub(super) const RAMP_GROWTH: f32 = 1.5;
 pub(super) const STRONG_JUMP: f32 = 20.0;
 
 impl<const N: usize> PhaseDetector<N> {
-    /// A slip start confirmed early, at its second sample `k` (`along`: its s̈ towards the
-    /// slide): a jump breakaway (expected: `jump_breakaway`) whose two samples are at least
-    /// [`STRONG_JUMP`] thresholds, or (`early_ramp_starts`) a ramp breakaway whose second one
-    /// is; the sample before the first within one, all three measured (a fill continues a
-    /// line). Its
-    /// sliding side, the parabola through its first three samples, comes a sample later
-    /// ([`Self::late_slip_start_accel`]): the line through two put predict mode's M 1.35 % off
-    /// on El Centro at 1 kHz. A burst of two such samples and nothing after them, which a
-    /// fourth sample would reject as a spike, is taken for a slip start: ~170 σ twice running
-    /// is a fault of the sensor, not noise.
+    /// A slip start confirmed early, at its second sample `k` (`along`: its s̈ towards the slide):
+    /// a jump breakaway (expected: `jump_breakaway`) whose two samples are at least [`STRONG_JUMP`]
+    /// thresholds, or (`early_ramp_starts`) a ramp breakaway whose second one is; the sample before
+    /// the first within one, all three measured (a fill continues a line). Its sliding side, the
+    /// parabola through its first three samples, comes a sample later
+    /// ([`Self::late_slip_start_accel`]): the line through two put predict mode's M 1.35 % off on
+    /// El Centro at 1 kHz. A burst of two such samples and nothing after them, which a fourth
+    /// sample would reject as a spike, is taken for a slip start: ~170 σ twice running is a fault
+    /// of the sensor, not noise.
     #[inline]
     pub(super) fn strong_start(&self, p: u64, k: u64, along: f32) -> bool {
         let strong = STRONG_JUMP * self.cfg.threshold_m_s2;

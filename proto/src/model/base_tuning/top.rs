@@ -433,15 +433,15 @@ impl BaseTuning {
     }
 
     /// Either mode without a rest, with a planned start: the run's first [`Self::open_start`]
-    /// samples of the table acceleration `table` (the model's input, before any offset is removed; NaN: a missing or
-    /// flagged sample). At the start's end, a table offset found is taken as the offset in use,
-    /// known from then on: it is removed from the base's samples before the sliding
-    /// identification, whose fits from one direction of sliding then give μ itself instead of μ
-    /// and the offset as one constant (`offset_known`), and later estimates from both
-    /// directions replace it like any other; none found, the provisional one
-    /// ([`Self::begin_table_start`]) is dropped. Returns the change of the offset in use at
-    /// the start's end (the offset taken less the provisional one) and the intervals the model
-    /// has integrated it over (the start's samples less one), for
+    /// samples of the table acceleration `table` (the model's input, before any offset is removed;
+    /// NaN: a missing or flagged sample). At the start's end, a table offset found is taken as the
+    /// offset in use, known from then on: it is removed from the base's samples before the sliding
+    /// identification, whose fits from one direction of sliding then give μ itself instead of μ and
+    /// the offset as one constant (`offset_known`), and later estimates from both directions
+    /// replace it like any other; none found, the provisional one ([`Self::begin_table_start`]) is
+    /// dropped. Returns the change of the offset in use at the start's end (the offset taken less
+    /// the provisional one) and the intervals the model has integrated it over (the start's samples
+    /// less one), for
     /// [`StickSlipEstimator::remove_input_offset`](ssvr_core::stick_slip::StickSlipEstimator::remove_input_offset).
     #[inline(never)]
     pub fn note_table_start(&mut self, table: &[f32]) -> Option<(f32, u32)> {
