@@ -193,8 +193,9 @@ pub type InputTracker = Box<dyn FnMut(&mut [f32; ssvr_proto::CHANNELS], u8) -> T
 pub struct Tracked {
     /// A slip start's sliding side at its start, in the model's units.
     pub start_accel: Option<f32>,
-    /// The base accelerometer's step at the sample's event (m/s², in the model's units).
-    pub event_step: f32,
+    /// The base accelerometer's step and kink at the sample's event (m/s², in the model's
+    /// units; unknown without an event).
+    pub event_step: ssvr_core::detect::EventStep,
     /// The sliding side of the slip start of the sample before, confirmed at its second sample
     /// ([`EventDetector::late_slip_start_accel`]; NaN at any other sample), in the model's
     /// units.
@@ -220,10 +221,14 @@ pub fn input_tracker(plan: &Plan) -> Result<InputTracker> {
             Tracked {
                 start_accel: matches!(event, Some(SlipEvent::SlipStart { .. }))
                     .then(|| slip_start_input(d.slip_start_accel(), tracked.1, inverse)),
-                event_step: event.as_ref().map_or(f32::NAN, |e| {
-                    let step = d.event_step(ssvr_proto::Event::from_detector(e).age_samples);
-                    slip_start_input(step, tracked.1, inverse)
-                }),
+                event_step: event
+                    .as_ref()
+                    .map_or(ssvr_core::detect::EventStep::UNKNOWN, |e| {
+                        let e = ssvr_proto::Event::from_detector(e);
+                        let stick = e.kind == ssvr_proto::EventKind::Stick;
+                        d.event_step(e.age_samples, stick)
+                            .scaled(slip_start_input(1.0, tracked.1, inverse))
+                    }),
                 late_start_accel: slip_start_input(d.late_slip_start_accel(), tracked.1, inverse),
             }
         }))

@@ -387,7 +387,7 @@ fn the_events_between_samples_bias_no_identification() {
     let base = Scene::load(dir.join("table2-test2.toml")).unwrap();
     let f = 1.0 / 0.184;
     for (rate, xi_within, f_within, rms) in
-        [(1_000.0, 5e-3, 2e-4, 0.12), (10_000.0, 5e-3, 1e-4, 0.02)]
+        [(1_000.0, 9e-3, 2e-4, 0.12), (10_000.0, 5e-3, 1e-4, 0.02)]
     {
         let mut s = base.clone();
         s.rate_hz = rate;
@@ -399,6 +399,10 @@ fn the_events_between_samples_bias_no_identification() {
             id.natural_frequency_hz / f - 1.0,
             id.damping_ratio / 0.016 - 1.0,
         );
+        std::println!(
+            "{rate} Hz: f {df:e}, ξ {dxi:e}, {} % RMS",
+            e.rms_err_pct_of_peak
+        );
         assert!(
             df.abs() < f_within && dxi.abs() < xi_within,
             "{rate} Hz: f {df:e}, ξ {dxi:e}"
@@ -407,6 +411,42 @@ fn the_events_between_samples_bias_no_identification() {
             e.rms_err_pct_of_peak < rms,
             "{rate} Hz: {} % RMS",
             e.rms_err_pct_of_peak
+        );
+    }
+}
+
+/// The default scene told its own specimen, fuse mode: the identified f and ξ at 1, 2 and
+/// 10 kHz, each event's step and kink of the base acceleration taken from the detector's
+/// ring (`PhaseDetector::step_at`) and placed at its time (`OscillatorIdentifier::jump`).
+/// Measured ξ̂ +0.63 %, +0.06 %, −0.034 % and f̂ −0.036 %, −0.016 %, +0.0004 % (before, when
+/// the step was the second difference across the event, which read a slip start's kink as a
+/// step of 0.6–1.4 m/s² at 1 kHz: ξ̂ −3.0 %, −0.36 %, −0.05 %; f̂ −0.086 %, −0.012 %, 0.000 %).
+/// Nothing adopted (the prior is right).
+#[test]
+fn the_default_scenes_identification_at_coarse_rates() {
+    for (rate, xi_within, f_within) in [
+        (1_000.0, 8e-3, 5e-4),
+        (2_000.0, 1.5e-3, 3e-4),
+        (10_000.0, 6e-4, 2e-5),
+    ] {
+        let mut s = Scene::default_scene();
+        s.rate_hz = rate;
+        s.samples = (s.duration_s * rate).round() as u64;
+        let out = go(&s, Mode::Fuse);
+        let id = &out.report.estimator.identified;
+        let (df, dxi) = (
+            id.natural_frequency_hz / 7.0 - 1.0,
+            id.damping_ratio / 0.05 - 1.0,
+        );
+        std::println!("{rate} Hz: f {df:e}, ξ {dxi:e}");
+        assert!(
+            df.abs() < f_within && dxi.abs() < xi_within,
+            "{rate} Hz: f {df:e}, ξ {dxi:e}"
+        );
+        assert_eq!(
+            id.in_use.as_ref().map(|u| u.adoptions),
+            Some(0),
+            "{rate} Hz"
         );
     }
 }

@@ -12,6 +12,7 @@ use crate::flags;
 use crate::plan::{DetectorPlan, Plan, PlanError};
 use ssvr_core::detect::acceleration::PhaseDetector;
 use ssvr_core::detect::displacement::{ReversalDetector, SlipEvent};
+use ssvr_core::detect::EventStep;
 
 /// The displacement detector with a ring of `N` samples.
 pub type DisplacementDetector<const N: usize> = ReversalDetector<N>;
@@ -94,12 +95,13 @@ pub trait EventDetector: Sized {
     fn late_slip_start_accel(&self) -> f32 {
         f32::NAN
     }
-    /// The step of the detector's input at an event `age` sample intervals before the last
-    /// sample processed (the base accelerometer's jump at a friction event; NaN when the
-    /// detector does not read the base accelerometer: the displacement's).
-    fn event_step(&self, age: f32) -> f32 {
-        let _ = age;
-        f32::NAN
+    /// The step and kink of the detector's input at an event `age` sample intervals before the last
+    /// sample processed, `stick` when the event is a stick (the base accelerometer's jump at a
+    /// friction event; NaN when the detector does not read the base accelerometer: the
+    /// displacement's).
+    fn event_step(&self, age: f32, stick: bool) -> EventStep {
+        let _ = (age, stick);
+        EventStep::UNKNOWN
     }
 }
 
@@ -171,7 +173,7 @@ impl<const N: usize> EventDetector for PhaseDetector<N> {
         PhaseDetector::late_slip_start_accel(self)
     }
 
-    fn event_step(&self, age: f32) -> f32 {
-        PhaseDetector::step_at(self, age)
+    fn event_step(&self, age: f32, stick: bool) -> EventStep {
+        PhaseDetector::step_at(self, age, stick)
     }
 }

@@ -31,6 +31,7 @@ use crate::frame::{Frame, Sample};
 use crate::model::{Model, Pushed};
 use crate::table_gain::{GainEstimate, GainSlot, TableGain};
 use crate::zeroing::Zeroing;
+use ssvr_core::detect::EventStep;
 use ssvr_core::stick_slip::MuEstimate;
 
 /// Samples per batch: 16 (1.6 ms at 10 kHz) brings the stick-slip estimator's steady-state
@@ -130,9 +131,9 @@ struct BatchEvents {
     /// third, were there one, would go without: the breakaway's μ instead).
     starts: [f32; 2],
     noted: usize,
-    /// The base's step at each event, in order; a fifth event in one batch, were there one,
-    /// would go without (its identification blocks as sampled).
-    steps: [f32; 4],
+    /// The base's step and kink at each event, in order; a fifth event in one batch, were
+    /// there one, would go without (its identification blocks as sampled).
+    steps: [EventStep; 4],
     stepped: usize,
     /// Bit j: sample j brings the sliding side of a slip start confirmed at its second sample
     /// ([`EventDetector::late_slip_start_accel`]); the sides, in order (three at most: the
@@ -149,7 +150,7 @@ impl BatchEvents {
             mask: 0,
             starts: [f32::NAN; 2],
             noted: 0,
-            steps: [f32::NAN; 4],
+            steps: [EventStep::UNKNOWN; 4],
             stepped: 0,
             late_mask: 0,
             lates: [f32::NAN; 3],
@@ -293,7 +294,7 @@ impl<M: Model, D: EventDetector, G: GainSlot> Pipeline<M, D, G> {
                         pushed += 1;
                     }
                     self.model
-                        .note_event_step(steps.get(stepped).copied().unwrap_or(f32::NAN));
+                        .note_event_step(steps.get(stepped).copied().unwrap_or(EventStep::UNKNOWN));
                     stepped += 1;
                     fr.flags |= self.push(&e);
                 }
@@ -325,7 +326,11 @@ impl<M: Model, D: EventDetector, G: GainSlot> Pipeline<M, D, G> {
         let k = self.detector.gain_mismatch();
         let inverse = self.gain.get().map_or(1.0, TableGain::inverse);
         if let Some(x) = ev.steps.get_mut(ev.stepped) {
-            *x = slip_start_input(self.detector.event_step(e.age_samples), k, inverse);
+            let stick = e.kind == EventKind::Stick;
+            *x = self
+                .detector
+                .event_step(e.age_samples, stick)
+                .scaled(slip_start_input(1.0, k, inverse));
         }
         ev.stepped += 1;
         if e.kind == EventKind::SlipStart {

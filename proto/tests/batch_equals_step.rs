@@ -512,8 +512,8 @@ fn strong_jump_breakaways_batches_equal_single_steps() {
         fn late_slip_start_accel(&self) -> f32 {
             self.inner.late_slip_start_accel()
         }
-        fn event_step(&self, age: f32) -> f32 {
-            self.inner.event_step(age)
+        fn event_step(&self, age: f32, stick: bool) -> ssvr_core::detect::EventStep {
+            self.inner.event_step(age, stick)
         }
     }
 

@@ -36,6 +36,7 @@ use super::ring::slot;
 use super::SlipEvent;
 use crate::error::{check, Error, Param};
 
+mod event_step;
 mod gaps;
 mod offsets;
 mod slip_start;
@@ -305,33 +306,7 @@ impl<const N: usize> PhaseDetector<N> {
         }
     }
 
-    /// The step of the slip acceleration (m/s²) at the event just detected, `age` sample
-    /// intervals before the last sample processed: the first sample at or after the event (k)
-    /// less the one before, less the step before that (the motion's slope), from the ring. The
-    /// base accelerometer's jump at a friction event (the table's acceleration is continuous),
-    /// for [`crate::oscillator_id::OscillatorIdentifier::jump`], which needs the event's time
-    /// to a fraction of a sample: NaN when the slide's integrated velocity is uncertain by more
-    /// than a quarter sample's worth of the s̈ before the event (a jump breakaway, μs > μ, is
-    /// timed to a sample only, and the velocity carries that: at 1 kHz on El Centro the sticks'
-    /// ages came out up to 0.8 sample off), NaN when one of the three samples is missing, and
-    /// NaN beyond the ring or for an age not finite.
-    pub fn step_at(&self, age: f32) -> f32 {
-        let back = libm::floorf(age);
-        if !(back >= 0.0 && back + 3.0 <= N as f32) || self.k < back as u64 + 3 {
-            return f32::NAN;
-        }
-        let k = self.k - 1 - back as u64;
-        let (at, before, earlier) = (self.at(k), self.at(k - 1), self.at(k - 2));
-        if self.v_unc > 0.25 * libm::fabsf(before) || {
-            let mask = self.missing_mask(self.k - 1);
-            (0..3).any(|j| missing(mask, back as u64 + j))
-        } {
-            return f32::NAN;
-        }
-        (at - before) - (before - earlier)
-    }
-
-    fn at(&self, i: u64) -> f32 {
+    pub(super) fn at(&self, i: u64) -> f32 {
         self.ring[slot::<N>(i)]
     }
 
@@ -778,30 +753,6 @@ mod tests {
         assert!(max < 0.75, "max {max}");
         assert!(first < 0.1 && last < 0.1, "{first} {last}");
         assert!(last < 2.0 * first + 0.02, "{first} {last}");
-    }
-
-    /// `step_at`: a ramp of 0.01 m/s² per sample with a step of 2 m/s² at sample 500 (its
-    /// first sample after), read 0.4 sample ages later and 6 samples after it: the step, the
-    /// ramp's slope removed, to f32's rounding; NaN beyond the ring or for a NaN age.
-    #[test]
-    fn the_step_at_an_event() {
-        let cfg = PhaseDetectorConfig::for_noise(5e-3).unwrap();
-        let mut d = PhaseDetector::<64>::new(cfg).unwrap();
-        // (Offset-free from the start: the first samples, the offset's, are 0.)
-        for k in 0..506u32 {
-            let x = if k < 100 {
-                0.0
-            } else {
-                0.01 * (k - 100) as f32 + if k >= 500 { 2.0 } else { 0.0 }
-            };
-            d.process(x);
-        }
-        // The last sample is 505: sample 500 is 5 back, the event 5.4 sample intervals old.
-        let s = d.step_at(5.4);
-        assert!((s - 2.0).abs() < 1e-4, "{s}");
-        assert!(d.step_at(2.0).abs() < 1e-4);
-        assert!(d.step_at(62.0).is_nan() && d.step_at(f32::NAN).is_nan());
-        assert!(d.step_at(-1.0).is_nan());
     }
 
     #[test]

@@ -45,3 +45,35 @@ impl SlipEvent {
         }
     }
 }
+
+/// The slip acceleration's change at a friction event
+/// ([`PhaseDetector::step_at`](crate::detect::acceleration::PhaseDetector::step_at)): the base
+/// accelerometer's jump and change of slope there (the table's acceleration is smooth).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EventStep {
+    /// The jump at the event's time (m/s²): the line after it less the line before it.
+    pub step: f32,
+    /// The change of slope at the event (m/s² per sample interval).
+    pub kink: f32,
+}
+
+impl EventStep {
+    /// Not known (NaN).
+    pub const UNKNOWN: Self = Self {
+        step: f32::NAN,
+        kink: f32::NAN,
+    };
+
+    /// Both scaled by `factor` (another accelerometer's units).
+    pub fn scaled(self, factor: f32) -> Self {
+        Self {
+            step: self.step * factor,
+            kink: self.kink * factor,
+        }
+    }
+
+    /// Whether both are finite.
+    pub fn is_known(&self) -> bool {
+        self.step.is_finite() && self.kink.is_finite()
+    }
+}

@@ -14,4 +14,4 @@ mod event;
 mod ring;
 mod search;
 
-pub use event::SlipEvent;
+pub use event::{EventStep, SlipEvent};

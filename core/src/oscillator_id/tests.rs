@@ -579,7 +579,7 @@ fn jumps_at(shift: f64) {
             let due = flip.peek().map(|x| x.0 + lag);
             if jumps && due == Some(k) {
                 let &(_, age, step) = flip.next().unwrap();
-                id.jump(age + lag as f64, step);
+                id.jump(age + lag as f64, step, 0.0);
             } else if due == Some(k) {
                 flip.next();
             }

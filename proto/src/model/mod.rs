@@ -28,6 +28,7 @@ use crate::channel::CHANNELS;
 use crate::event::Event;
 use crate::frame::Frame;
 use crate::plan::{Plan, PlanError};
+use ssvr_core::detect::EventStep;
 use ssvr_core::stick_slip::{MuEstimate, StickSlipConfig};
 use ssvr_core::Error;
 
@@ -198,10 +199,10 @@ pub trait Model {
     fn note_late_slip_start(&mut self, slip_accel: f32) {
         let _ = slip_accel;
     }
-    /// The base accelerometer's step at the event about to be pushed (m/s², the detector's
-    /// [`EventDetector::event_step`](crate::EventDetector::event_step); NaN: unknown), for the
-    /// identification's blocks.
-    fn note_event_step(&mut self, step: f32) {
+    /// The base accelerometer's step and kink at the event about to be pushed (m/s², the
+    /// detector's [`EventDetector::event_step`](crate::EventDetector::event_step); NaN:
+    /// unknown), for the identification's blocks.
+    fn note_event_step(&mut self, step: EventStep) {
         let _ = step;
     }
     /// Predict `frames`, samples `from ..` of the batch: a run with no event after its first
@@ -308,7 +309,7 @@ impl<M: Model + ?Sized> Model for std::boxed::Box<M> {
     fn note_late_slip_start(&mut self, slip_accel: f32) {
         (**self).note_late_slip_start(slip_accel)
     }
-    fn note_event_step(&mut self, step: f32) {
+    fn note_event_step(&mut self, step: EventStep) {
         (**self).note_event_step(step)
     }
     fn predict_run(&mut self, frames: &mut [Frame], from: usize) {

@@ -16,6 +16,7 @@ use crate::flags;
 use crate::frame::Frame;
 use crate::pipeline::BATCH;
 use crate::plan::{Plan, PlanError};
+use ssvr_core::detect::EventStep;
 use ssvr_core::math::F32Poly;
 use ssvr_core::stick_slip::{MuEstimate, SlidingPhase, StickSlipCoefficients, StickSlipEstimator};
 use ssvr_core::Error;
@@ -66,7 +67,7 @@ pub struct StickSlipModel<
     /// ([`StickSlipEstimator::slide_demand`](ssvr_core::stick_slip::StickSlipEstimator::slide_demand)).
     late_demand: f32,
     /// The base's step at the event about to be pushed (`Model::note_event_step`).
-    event_step: f32,
+    event_step: EventStep,
     /// Fuse mode: the breakaway coefficients read the measured top acceleration (else the
     /// model's own).
     fuse: bool,
@@ -113,7 +114,7 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
             breakaways: Breakaways::default(),
             start_accel: f32::NAN,
             late_demand: f32::NAN,
-            event_step: f32::NAN,
+            event_step: EventStep::UNKNOWN,
             friction: F::none(),
             base_tuning: B::none(),
         }
@@ -252,7 +253,7 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot> Model
         if let Some(t) = &mut self.tuning {
             t.jump(e.age_samples, self.event_step);
         }
-        self.event_step = f32::NAN;
+        self.event_step = EventStep::UNKNOWN;
         Ok(pushed)
     }
 
@@ -273,7 +274,7 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot> Model
         }
     }
 
-    fn note_event_step(&mut self, step: f32) {
+    fn note_event_step(&mut self, step: EventStep) {
         self.event_step = step;
     }
 

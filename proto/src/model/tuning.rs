@@ -12,6 +12,7 @@
 //! coefficients are computed in f64 by the same code as the plan's (bit for bit the same on the
 //! host and on the M4F).
 
+use ssvr_core::detect::EventStep;
 use ssvr_core::oscillator_id::{GainEstimate, GainRows, OscillatorEstimate, OscillatorIdentifier};
 use ssvr_core::stick_slip::StickSlipCoefficients;
 use ssvr_core::{Structure, StructureParams};
@@ -114,11 +115,12 @@ impl<G: GainRows<f32>> Tuning<G> {
     }
 
     /// A friction event `age` sample intervals before the next sample pushed, the base
-    /// accelerometer's `step` there: placed at its time in the identifier's block averages
-    /// ([`OscillatorIdentifier::jump`]). Not during the rest (no samples identified, no event).
-    pub fn jump(&mut self, age: f32, step: f32) {
+    /// accelerometer's step and kink there: placed at its time in the identifier's block
+    /// averages ([`OscillatorIdentifier::jump`]). Not during the rest (no samples identified, no
+    /// event).
+    pub fn jump(&mut self, age: f32, step: EventStep) {
         if self.rest == 0 {
-            self.id.jump(age, step);
+            self.id.jump(age, step.step, step.kink);
         }
     }
 
