@@ -40,6 +40,16 @@ impl<T: Real, const N: usize, const K: usize> PagedNormal<T, N, K> {
     /// The products' indices in `[φ, t]`, in the sums' order: the upper triangle of S (i ≤ j
     /// < N), then c (φi·t), then t·t.
     const PAIRS: [(usize, usize); K] = pairs::<N, K>();
+    /// [`Self::PAIRS`] in bytes (the rescaling's table in the firmware's flash: a quarter).
+    const BYTE_PAIRS: [[u8; 2]; K] = {
+        let mut out = [[0u8; 2]; K];
+        let mut k = 0;
+        while k < K {
+            out[k] = [Self::PAIRS[k].0 as u8, Self::PAIRS[k].1 as u8];
+            k += 1;
+        }
+        out
+    };
 
     /// Empty normal equations, forgetting `forgetting` per row in (0, 1] (not checked here: the
     /// identifiers that own them check it).
@@ -104,6 +114,27 @@ impl<T: Real, const N: usize, const K: usize> PagedNormal<T, N, K> {
         self.page_rows = 0;
     }
 
+    /// The rows already in, as if their first `scaled` regressors and their targets had been
+    /// `c` times what they were (a change of the measurements' units, the other regressors
+    /// without units: each product scaled by the factors of its pair). Exact up to the
+    /// products' rounding.
+    pub fn rescale(&mut self, scaled: usize, c: f32) {
+        scale_products(
+            &mut self.sums,
+            &mut self.page,
+            &Self::BYTE_PAIRS,
+            (scaled, N),
+            c,
+        );
+    }
+
+    /// Every row dropped (the count of rows ever added is kept).
+    pub fn clear(&mut self) {
+        self.page = [T::ZERO; K];
+        self.sums = [0.0; K];
+        (self.rows, self.page_rows) = (0.0, 0);
+    }
+
     /// Rows ever added (wrapping): a fit changes only when it does.
     pub fn added(&self) -> u32 {
         self.added
@@ -159,6 +190,32 @@ use products;
 
 /// [`PagedNormal::PAIRS`]: (i, j) for each of the `K` products of `N` regressors and a target
 /// (index `N`): S's upper triangle row by row, then c (i, N), then t² (N, N).
+/// Each product of `pairs` (its sum and its page's) scaled by `c` for each of its two indices
+/// below `scaled` or equal to `target` (one function for every size: the firmware's flash).
+#[cold]
+#[inline(never)]
+fn scale_products<T: Real>(
+    sums: &mut [f64],
+    page: &mut [T],
+    pairs: &[[u8; 2]],
+    (scaled, target): (usize, usize),
+    c: f32,
+) {
+    let f = |i: u8| {
+        let i = usize::from(i);
+        if i < scaled || i == target {
+            c
+        } else {
+            1.0
+        }
+    };
+    for ((s, p), &[i, j]) in sums.iter_mut().zip(page.iter_mut()).zip(pairs) {
+        let k = f(i) * f(j);
+        *s *= f64::from(k);
+        *p = *p * T::from_f64(f64::from(k));
+    }
+}
+
 const fn pairs<const N: usize, const K: usize>() -> [(usize, usize); K] {
     let mut out = [(0, 0); K];
     let (mut i, mut k) = (0, 0);

@@ -180,6 +180,21 @@ impl<T: Real> SlidingIdentifier<T> {
         true
     }
 
+    /// The accelerations already in (the rows, the episode's blocks and the block being
+    /// summed), as if they had been measured `c` times as large: the accelerometer's gain
+    /// correction changed (the table accelerometer's gain adopted: every channel rescaled from
+    /// the next sample on). ω and ζ are ratios of accelerations and do not move; μ·g and the
+    /// offset scale by `c`, as if every row had been taken in the new units.
+    pub fn rescale(&mut self, c: f32) {
+        if !(c.is_finite() && c > 0.0) {
+            return;
+        }
+        self.normal.rescale(2, c);
+        let k = T::from_f64(f64::from(c));
+        self.sum = self.sum * k;
+        self.prev = [self.prev[0] * k, self.prev[1] * k];
+    }
+
     /// Ends the episode: the next sample starts a new one.
     #[inline(always)]
     pub fn end_episode(&mut self) {

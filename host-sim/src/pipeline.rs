@@ -200,6 +200,9 @@ pub struct Tracked {
     /// ([`EventDetector::late_slip_start_accel`]; NaN at any other sample), in the model's
     /// units.
     pub late_start_accel: f32,
+    /// The factor the accelerometers' units changed by at this sample (the table's gain
+    /// adopted: `Model::rescale_units`), else 1.
+    pub units: f32,
 }
 
 /// [`InputTracker`] of a plan.
@@ -214,6 +217,11 @@ pub fn input_tracker(plan: &Plan) -> Result<InputTracker> {
             let tracked = (d.offset(), d.gain_mismatch());
             model_inputs(ch, f, tracked, gain.as_mut(), index, event.as_ref());
             index = index.wrapping_add(1);
+            // (The table's gain adopted at this sample: its units' factor.)
+            let units = gain
+                .as_mut()
+                .and_then(ssvr_proto::table_gain::TableGain::take_change)
+                .map_or(1.0, |(_, c)| c);
             // A slip start's sliding side at its start (the pipeline notes it for the model).
             let inverse = gain
                 .as_ref()
@@ -230,6 +238,7 @@ pub fn input_tracker(plan: &Plan) -> Result<InputTracker> {
                             .scaled(slip_start_input(1.0, tracked.1, inverse))
                     }),
                 late_start_accel: slip_start_input(d.late_slip_start_accel(), tracked.1, inverse),
+                units,
             }
         }))
     }

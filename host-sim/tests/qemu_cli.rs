@@ -126,10 +126,11 @@ fn check_common(v: &Value, samples: u64) {
     // indices kept, the jump test after a gap, the gap refilled, fills held after a jump) and
     // strong jump breakaways confirmed at their second sample (the sliding side a sample
     // later, through the pipeline to the model); +0.7 KB in the seventeenth for the events'
-    // kinks (two samples corrected at an event; 97 096 B on the default scene); the
-    // velocity-dependent law is compiled in only for a scene with one); the budget is 96 KiB,
-    // bounded here a little above the measured size so that a regression fails.
-    assert!(num(v, "board_flash_bytes") <= 95.0 * 1024.0);
+    // kinks (two samples corrected at an event) and +0.8 KB for the rescaling at the table
+    // gain's adoption (97 896 B on the default scene); the velocity-dependent law is compiled
+    // in only for a scene with one); the budget is 96 KiB, bounded here a little above the
+    // measured size so that a regression fails.
+    assert!(num(v, "board_flash_bytes") <= 95.7 * 1024.0);
     assert!(num(v, "board_ram_bytes") <= 8.0 * 1024.0);
     // The model as the pipeline runs it, all identification on, against the budget of
     // 50 instructions per steady sample (reported, not met by the stick-slip and fixed-base

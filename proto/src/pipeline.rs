@@ -141,6 +141,10 @@ struct BatchEvents {
     late_mask: u32,
     lates: [f32; 3],
     late_noted: usize,
+    /// Bit j: the table accelerometer's gain was adopted at sample j (its samples and those
+    /// after it in the new units), the units' factor ([`Model::rescale_units`]).
+    units_mask: u32,
+    units: f32,
 }
 
 impl BatchEvents {
@@ -155,6 +159,8 @@ impl BatchEvents {
             late_mask: 0,
             lates: [f32::NAN; 3],
             late_noted: 0,
+            units_mask: 0,
+            units: 1.0,
         }
     }
 }
@@ -259,6 +265,7 @@ impl<M: Model, D: EventDetector, G: GainSlot> Pipeline<M, D, G> {
     pub fn step_batch(&mut self, samples: &[Sample], frames: &mut [Frame]) -> usize {
         let mut n = 0;
         let mut ev = BatchEvents::new();
+        let first = self.index;
         for (s, fr) in samples.iter().zip(frames.iter_mut()).take(BATCH) {
             let channels;
             (*fr, channels) = self.detect(s);
@@ -271,16 +278,25 @@ impl<M: Model, D: EventDetector, G: GainSlot> Pipeline<M, D, G> {
             self.model.note_inputs(n, &channels, fr.flags);
             n += 1;
         }
+        if let Some((at, c)) = self.gain.get_mut().and_then(TableGain::take_change) {
+            Self::note_units(&mut ev, at.wrapping_sub(first), c);
+        }
         let BatchEvents {
             mask: events,
             starts,
             steps,
             late_mask,
             lates,
+            units_mask,
+            units,
             ..
         } = ev;
+        let split = events | units_mask;
         let (mut i, mut pushed, mut stepped, mut late) = (0, 0usize, 0usize, 0usize);
         while i < n {
+            if units_mask & (1 << i) != 0 {
+                self.model.rescale_units(units);
+            }
             if late_mask & (1 << i) != 0 {
                 self.model
                     .note_late_slip_start(lates.get(late).copied().unwrap_or(f32::NAN));
@@ -299,8 +315,8 @@ impl<M: Model, D: EventDetector, G: GainSlot> Pipeline<M, D, G> {
                     fr.flags |= self.push(&e);
                 }
             }
-            // The run up to the next event (bit j of `events`: sample j has one).
-            let later = events.checked_shr(i as u32 + 1).unwrap_or(0);
+            // The run up to the next event or change of units (bit j: sample j has one).
+            let later = split.checked_shr(i as u32 + 1).unwrap_or(0);
             let end = if later == 0 {
                 n
             } else {
@@ -339,6 +355,18 @@ impl<M: Model, D: EventDetector, G: GainSlot> Pipeline<M, D, G> {
             }
             ev.noted += 1;
             self.side_due = self.detector.side_pending();
+        }
+    }
+
+    /// The table accelerometer's gain adopted at sample `n` of the batch, the samples' units
+    /// changed by `c` from it on: noted for the model's rescaling before that sample's run
+    /// ([`Model::rescale_units`]).
+    #[cold]
+    #[inline(never)]
+    fn note_units(ev: &mut BatchEvents, n: u32, c: f32) {
+        if (n as usize) < BATCH {
+            ev.units_mask = 1 << n;
+            ev.units = c;
         }
     }
 

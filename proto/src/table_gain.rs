@@ -107,6 +107,9 @@ pub struct TableGain {
     adopted: f32,
     inverse: f32,
     estimate: Option<GainEstimate>,
+    /// The last adoption not yet taken ([`Self::take_change`]): its sample and the factor
+    /// the samples' units changed by.
+    change: Option<(u32, f32)>,
 }
 
 /// An estimate of the table accelerometer's gain, 1 + e.
@@ -148,6 +151,7 @@ impl TableGain {
             adopted: 1.0,
             inverse: 1.0,
             estimate: None,
+            change: None,
         }
     }
 
@@ -169,6 +173,14 @@ impl TableGain {
     #[inline(always)]
     pub fn inverse(&self) -> f32 {
         self.inverse
+    }
+
+    /// The last adoption, once: the sample from which the accelerometers' samples are divided
+    /// by the new gain, and the factor their units changed by (the new [`Self::inverse`] over
+    /// the old one), for the model's rescaling
+    /// ([`Model::rescale_units`](crate::Model::rescale_units)).
+    pub fn take_change(&mut self) -> Option<(u32, f32)> {
+        self.change.take()
     }
 
     /// The latest estimate, adopted or not, with the gain in use.
@@ -271,10 +283,10 @@ impl TableGain {
         }
         self.fit.add(&[d, w], q);
         self.episodes += 1;
-        self.solve();
+        self.solve(index);
     }
 
-    fn solve(&mut self) {
+    fn solve(&mut self, index: u32) {
         if self.episodes < MIN_EPISODES {
             return;
         }
@@ -296,8 +308,15 @@ impl TableGain {
             && libm::fabs(gain - 1.0) <= MAX_ERROR
             && libm::fabs(gain - f64::from(self.adopted)) > libm::fmax(3.0 * sigma, MIN_CHANGE)
         {
+            let old = self.inverse;
             self.adopted = gain as f32;
             self.inverse = 1.0 / self.adopted;
+            let c = self.inverse / old;
+            // (Two adoptions not yet taken: the samples changed from the first one on.)
+            self.change = Some(match self.change {
+                Some((at, before)) => (at, before * c),
+                None => (index, c),
+            });
         }
     }
 }

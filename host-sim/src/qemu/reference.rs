@@ -240,6 +240,23 @@ impl Reference {
                 let mut channels = s.channels;
                 zeroing.apply(k as u32, &mut channels, f.flags);
                 let tracked = inputs(&mut channels, f.flags);
+                if tracked.units != 1.0 {
+                    // (The table's gain adopted: the model's rescaling, the firmware's code.)
+                    breakaways.rescale(tracked.units);
+                    if let Some(b) = base_tuning.as_mut() {
+                        let level = est.phase().level();
+                        let before = b.mu_for(level);
+                        b.rescale(tracked.units);
+                        let mu = b.mu_for(level);
+                        if mu != before {
+                            est.set_friction(f64::from(mu));
+                            let d = b.top_shift(level, before);
+                            if d != 0.0 {
+                                est.shift_top(f64::from(d));
+                            }
+                        }
+                    }
+                }
                 if let Some(a) = tracked.start_accel {
                     *start_accel = a;
                 }

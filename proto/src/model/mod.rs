@@ -205,6 +205,14 @@ pub trait Model {
     fn note_event_step(&mut self, step: EventStep) {
         let _ = step;
     }
+    /// Every accelerometer's units change by the factor `c` from the next sample predicted on:
+    /// the pipeline adopted the table accelerometer's gain
+    /// ([`TableGain`](crate::table_gain::TableGain)), and the samples so far were read `1/c`
+    /// times what they now are. What the model identified from them, and the offsets it
+    /// removes, are rescaled to the new units (called before that sample's event and run).
+    fn rescale_units(&mut self, c: f32) {
+        let _ = c;
+    }
     /// Predict `frames`, samples `from ..` of the batch: a run with no event after its first
     /// sample. Bit for bit the same as one sample at a time. It uses up the inputs noted for
     /// those samples (a model may work in place of them): each range is predicted once.
@@ -272,6 +280,13 @@ impl Breakaways {
         self.mean
     }
 
+    /// The coefficients so far as if their accelerations had been measured `c` times as large
+    /// (the table accelerometer's gain adopted: [`Model::rescale_units`]).
+    pub fn rescale(&mut self, c: f32) {
+        self.mean *= c;
+        self.m2 *= c * c;
+    }
+
     /// How many coefficients the mean is of.
     pub fn count(&self) -> u32 {
         self.n
@@ -311,6 +326,9 @@ impl<M: Model + ?Sized> Model for std::boxed::Box<M> {
     }
     fn note_event_step(&mut self, step: EventStep) {
         (**self).note_event_step(step)
+    }
+    fn rescale_units(&mut self, c: f32) {
+        (**self).rescale_units(c)
     }
     fn predict_run(&mut self, frames: &mut [Frame], from: usize) {
         (**self).predict_run(frames, from)

@@ -278,6 +278,23 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot> Model
         self.event_step = step;
     }
 
+    #[cold]
+    #[inline(never)]
+    fn rescale_units(&mut self, c: f32) {
+        self.breakaways.rescale(c);
+        let Some(bt) = self.base_tuning.get_mut() else {
+            return;
+        };
+        let level = self.est.phase().level();
+        let before = bt.mu_for(level);
+        bt.rescale(c);
+        let mu = bt.mu_for(level);
+        if mu != before {
+            // (As an adoption: predict mode's momentum-balance top shifts with μ while sliding.)
+            self.friction_adopted(mu, level, before);
+        }
+    }
+
     #[inline(always)]
     fn note_inputs(&mut self, i: usize, channels: &[f32; CHANNELS], flags: u8) {
         if let (Some(u), Some(y)) = (self.table.get_mut(i), self.top.get_mut(i)) {
@@ -533,9 +550,17 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot>
             self.est.retune(c);
         }
         if let Some(mu) = mu {
-            self.est.set_friction(mu);
-            // (Predict mode while sliding: the momentum balance's top jumps with μ; the state
-            // alike.)
+            self.friction_adopted(mu, level, before);
+        }
+    }
+
+    /// The base tuning's friction coefficient `mu` adopted in phase `level`, `before` the one
+    /// in use until then: the estimator's friction, and in predict mode while sliding the
+    /// momentum balance's top, which jumps with μ (the state alike).
+    #[inline(never)]
+    fn friction_adopted(&mut self, mu: f32, level: i8, before: f32) {
+        self.est.set_friction(mu);
+        if let Some(bt) = self.base_tuning.get() {
             let d = bt.top_shift(level, before);
             if d != 0.0 {
                 self.est.shift_top(d);
