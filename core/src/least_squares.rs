@@ -188,8 +188,6 @@ macro_rules! products {
 }
 use products;
 
-/// [`PagedNormal::PAIRS`]: (i, j) for each of the `K` products of `N` regressors and a target
-/// (index `N`): S's upper triangle row by row, then c (i, N), then t² (N, N).
 /// Each product of `pairs` (its sum and its page's) scaled by `c` for each of its two indices
 /// below `scaled` or equal to `target` (one function for every size: the firmware's flash).
 #[cold]
@@ -204,18 +202,20 @@ fn scale_products<T: Real>(
     let f = |i: u8| {
         let i = usize::from(i);
         if i < scaled || i == target {
-            c
+            f64::from(c)
         } else {
             1.0
         }
     };
     for ((s, p), &[i, j]) in sums.iter_mut().zip(page.iter_mut()).zip(pairs) {
         let k = f(i) * f(j);
-        *s *= f64::from(k);
-        *p = *p * T::from_f64(f64::from(k));
+        *s *= k;
+        *p = *p * T::from_f64(k);
     }
 }
 
+/// [`PagedNormal::PAIRS`]: (i, j) for each of the `K` products of `N` regressors and a target
+/// (index `N`): S's upper triangle row by row, then c (i, N), then t² (N, N).
 const fn pairs<const N: usize, const K: usize>() -> [(usize, usize); K] {
     let mut out = [(0, 0); K];
     let (mut i, mut k) = (0, 0);

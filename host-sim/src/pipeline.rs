@@ -214,7 +214,7 @@ pub fn input_tracker(plan: &Plan) -> Result<InputTracker> {
         Ok(Box::new(move |ch, f| {
             let table = ch[ssvr_proto::Channel::TableAccel.index()];
             let event = d.process_with_reference(D::INPUT.of(ch, f), table);
-            let tracked = (d.offset(), d.gain_mismatch());
+            let tracked = (d.base_offset(), d.gain_mismatch());
             model_inputs(ch, f, tracked, gain.as_mut(), index, event.as_ref());
             index = index.wrapping_add(1);
             // (The table's gain adopted at this sample: its units' factor.)

@@ -76,6 +76,13 @@ pub trait EventDetector: Sized {
     fn offset(&self) -> f32 {
         0.0
     }
+    /// What the models' inputs subtract from the base accelerometer before dividing it by 1 +
+    /// the gain mismatch ([`crate::pipeline::model_inputs`]): the base then reads in the table's units
+    /// with the table's offset (the acceleration detector's
+    /// [`PhaseDetector::base_offset`]; [`Self::offset`] by default).
+    fn base_offset(&self) -> f32 {
+        self.offset()
+    }
     /// The gain mismatch of its input against the table acceleration it tracks and removes (the
     /// slip acceleration's; 0 for the displacement).
     fn gain_mismatch(&self) -> f32 {
@@ -155,6 +162,10 @@ impl<const N: usize> EventDetector for PhaseDetector<N> {
 
     fn offset(&self) -> f32 {
         PhaseDetector::offset(self)
+    }
+
+    fn base_offset(&self) -> f32 {
+        PhaseDetector::base_offset(self)
     }
 
     fn gain_mismatch(&self) -> f32 {

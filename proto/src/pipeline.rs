@@ -5,8 +5,9 @@
 //! Samples are processed in batches of at most [`BATCH`] ([`Pipeline::step_batch`]); the result
 //! is that of processing them one at a time ([`Pipeline::step`] is a batch of one), in this
 //! order: steps 1–2 on every sample of the batch first, then steps 3–4 over the batch in runs
-//! split at the samples with an event (a model's prediction of a run is its per-sample
-//! prediction on each sample, bit for bit):
+//! split at the samples with an event or with the table accelerometer's gain adopted
+//! ([`Model::rescale_units`] before that sample) (a model's prediction of a run is its
+//! per-sample prediction on each sample, bit for bit):
 //!
 //! 1. flags: `NOT_FINITE` if a channel is NaN/inf; `MISSING` with `ADC_ERROR`; the displacement
 //!    is unusable (`DISP_INVALID`) if the sample is missing, the displacement is not finite,
@@ -429,7 +430,7 @@ impl<M: Model, D: EventDetector, G: GainSlot> Pipeline<M, D, G> {
         model_inputs(
             &mut channels,
             f,
-            (self.detector.offset(), self.detector.gain_mismatch()),
+            (self.detector.base_offset(), self.detector.gain_mismatch()),
             self.gain.get_mut(),
             self.index,
             detected.as_ref(),

@@ -108,8 +108,10 @@ pub struct TableGain {
     inverse: f32,
     estimate: Option<GainEstimate>,
     /// The last adoption not yet taken ([`Self::take_change`]): its sample and the factor
-    /// the samples' units changed by.
+    /// the samples' units changed by; and 1 + the batch (of [`crate::pipeline::BATCH`] samples
+    /// from the run's start) of the last adoption (0: none).
     change: Option<(u32, f32)>,
+    change_batch: u32,
 }
 
 /// An estimate of the table accelerometer's gain, 1 + e.
@@ -152,6 +154,7 @@ impl TableGain {
             inverse: 1.0,
             estimate: None,
             change: None,
+            change_batch: 0,
         }
     }
 
@@ -304,19 +307,20 @@ impl TableGain {
             episodes: self.episodes,
             in_use: self.adopted,
         });
+        // (At most one adoption per batch: the pipeline takes a batch's change once, at its
+        // end, and the host's reference one sample at a time; a second one would have them
+        // rescale differently. Two episodes' ends within 16 samples are all but impossible.)
+        let batch = index / crate::pipeline::BATCH as u32 + 1;
         if sigma < ADOPT_SIGMA
             && libm::fabs(gain - 1.0) <= MAX_ERROR
             && libm::fabs(gain - f64::from(self.adopted)) > libm::fmax(3.0 * sigma, MIN_CHANGE)
+            && batch != self.change_batch
         {
             let old = self.inverse;
             self.adopted = gain as f32;
             self.inverse = 1.0 / self.adopted;
-            let c = self.inverse / old;
-            // (Two adoptions not yet taken: the samples changed from the first one on.)
-            self.change = Some(match self.change {
-                Some((at, before)) => (at, before * c),
-                None => (index, c),
-            });
+            self.change = Some((index, self.inverse / old));
+            self.change_batch = batch;
         }
     }
 }

@@ -67,7 +67,9 @@ pub fn instructions_goal(model: Model) -> f64 {
         Model::StickSlip | Model::FixedBase => GOAL_INSTRUCTIONS_PER_SAMPLE_STICK_SLIP,
     }
 }
-/// Goal: board image flash (bytes): 96 KiB of the STM32F446RE's 512 KiB. It was 32 KiB
+/// Goal: board image flash (bytes): 100 KiB of the STM32F446RE's 512 KiB (about a fifth; 96
+/// KiB until the events' kinks and the rescaling at the table gain's adoption, seventeenth
+/// session, which left 96 KiB with 60 B to spare at best). It was 32 KiB
 /// ([`BOARD_FLASH_32K`], still reported) until the fuse mode's online identification of f and
 /// ξ, whose adoption re-derives the estimator's coefficients in f64 on the device (~15 KB of
 /// soft-float and libm code: the stick-slip board image went from 32 600 B to 47 336 B), and
@@ -75,7 +77,7 @@ pub fn instructions_goal(model: Model) -> f64 {
 /// from the sliding phases (65 040 B) and the table accelerometer's gain against the
 /// displacement sensor with predict mode's one-way friction (69 288 B). A fifth of the flash
 /// leaves the board room for its logging and transport code.
-pub const GOAL_BOARD_FLASH_BYTES: u64 = 96 * 1024;
+pub const GOAL_BOARD_FLASH_BYTES: u64 = 100 * 1024;
 /// The board image's former flash budget (bytes), reported as `board_flash_le_32k`.
 pub const BOARD_FLASH_32K: u64 = 32 * 1024;
 /// Goal: board image static RAM, `.data` + `.bss` (+ `.uninit`), bytes.

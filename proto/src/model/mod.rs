@@ -176,8 +176,9 @@ pub enum Pushed {
 }
 
 /// An estimator model as the pipeline drives it. Per batch: [`Model::note_inputs`] for each
-/// sample while the detector runs, then, in runs split at the samples with an event,
-/// [`Model::push`] of the event and [`Model::predict_run`] of the run.
+/// sample while the detector runs, then, in runs split at the samples with an event or a change
+/// of units, [`Model::rescale_units`] at a change, [`Model::push`] of the event and
+/// [`Model::predict_run`] of the run.
 pub trait Model {
     /// Which model it is.
     fn kind(&self) -> ModelKind;
@@ -209,7 +210,9 @@ pub trait Model {
     /// the pipeline adopted the table accelerometer's gain
     /// ([`TableGain`](crate::table_gain::TableGain)), and the samples so far were read `1/c`
     /// times what they now are. What the model identified from them, and the offsets it
-    /// removes, are rescaled to the new units (called before that sample's event and run).
+    /// removes, are rescaled to the new units (called before that sample's event and run; the
+    /// stick-slip model's base tuning and breakaways: fuse mode's μ from the estimator's own
+    /// identification and a friction law's fit are left as they are).
     fn rescale_units(&mut self, c: f32) {
         let _ = c;
     }
