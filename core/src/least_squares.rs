@@ -128,13 +128,6 @@ impl<T: Real, const N: usize, const K: usize> PagedNormal<T, N, K> {
         );
     }
 
-    /// Every row dropped (the count of rows ever added is kept).
-    pub fn clear(&mut self) {
-        self.page = [T::ZERO; K];
-        self.sums = [0.0; K];
-        (self.rows, self.page_rows) = (0.0, 0);
-    }
-
     /// Rows ever added (wrapping): a fit changes only when it does.
     pub fn added(&self) -> u32 {
         self.added

@@ -4,27 +4,14 @@
 //! each event's exact step and kink (from the truth on each side of the event) give what the
 //! truth's cell averages (each sample the average over its interval, by quadrature) give.
 
-use host_sim::table_motion::TableMotion;
+use host_sim::scene::Scene;
 use host_sim::truth::{simulate, Truth, TruthInput};
 use ssvr_core::oscillator_id::{OscillatorEstimate, OscillatorIdentifier};
-use ssvr_core::{Structure, StructureParams};
 
-/// The default scene's specimen and input (Table 1 at its natural period), 10 s.
+/// The default scene's specimen (f 7 Hz, ξ 0.05) and input (Table 1 at its natural period), 10 s.
 fn truth() -> Truth {
-    let s = Structure::new(StructureParams {
-        m1_kg: 29.5,
-        m2_kg: 1.75,
-        natural_frequency_hz: 7.0,
-        damping_ratio: 0.05,
-        friction_coefficient: 0.2,
-        gravity_m_s2: 9.80665,
-    })
-    .unwrap();
-    let table = TableMotion::Harmonic {
-        amplitude_m_s2: 2.0,
-        period_s: 0.143,
-    };
-    simulate(&TruthInput::new(&s, &table, 10.0)).unwrap()
+    let s = Scene::default_scene();
+    simulate(&TruthInput::new(&s.structure, &s.table_motion(), 10.0)).unwrap()
 }
 
 /// (top, base) accelerations of sample k: the truth at t = k/rate, or its average over

@@ -278,6 +278,7 @@ mod tests {
                     assert!(offset.is_finite(), "{case}: offset {offset}");
                     worst.1 = worst.1.max((offset - (b_b - b_t)).abs());
                     assert!(worst.1 < 1e-3, "{case}: offset {offset}");
+                    assert!(base_offset.is_finite(), "{case}: base offset {base_offset}");
                     let want_base = b_b - (1.0 + k_true) * b_t;
                     worst.3 = worst.3.max((base_offset - want_base).abs());
                     assert!(
