@@ -11,6 +11,7 @@
 
 pub mod check;
 pub mod decode;
+pub mod goals;
 pub mod icount;
 pub mod image;
 pub mod log;
