@@ -148,8 +148,12 @@ impl Plan {
         Estimator32::new(&structure, rate)?;
         let (detector, ring, max_age) = if model.detects_on_acceleration() {
             // The kinetic friction a slide starts with: μ_slow under a velocity-dependent law.
+            // (Strong ramp breakaways confirmed at their second sample, in either mode: the
+            // slide's friction then comes from the breakaway, corrected a sample later from
+            // the sliding side in predict mode.)
             let d = PhaseDetectorConfig::for_noise(s.accel_noise_rms_m_s2)?
-                .with_friction(s.static_friction_coefficient, s.friction.at_rest(mu));
+                .with_friction(s.static_friction_coefficient, s.friction.at_rest(mu))
+                .with_early_ramp_starts(true);
             (
                 DetectorPlan::SlipAcceleration(d),
                 d.min_ring(),
@@ -204,11 +208,6 @@ impl Plan {
     /// ([`BaseTuning`](crate::model::BaseTuning), docs/ROBUSTNESS.md).
     pub fn with_mode(mut self, mode: Mode) -> Self {
         self.mode = mode;
-        // (Fuse mode: a strong ramp breakaway confirmed at its second sample, its slide's
-        // friction from the breakaway read on the measured top.)
-        if let DetectorPlan::SlipAcceleration(d) = &mut self.detector {
-            d.early_ramp_starts = mode == Mode::Fuse;
-        }
         if mode == Mode::Predict {
             self.stick_slip.identify_mu = false;
             self.stick_slip.use_identified_mu = false;

@@ -79,12 +79,15 @@ pub struct PhaseDetectorConfig {
     /// its fourth sample, whose sliding side gives the slide its μ), as a strong jump
     /// breakaway is confirmed early, instead of at its `confirm_samples`th: at coarse rates a
     /// smooth start reaches that within a sample (1.7 and 3.8 m/s² on the default scene at 1 kHz, against a
-    /// threshold of 0.042), while the model ran on in the stuck phase. Its sliding side comes
-    /// a sample later and the slide's friction from its breakaway, which reads the measured
-    /// top in fuse mode only: the plan sets it for fuse mode (`ssvr_proto`'s
-    /// `Plan::with_mode`; in predict mode the breakaway rests on the model's state, and on the
-    /// default scene at 1 kHz with every accelerometer 0.05 g off, no rest, an early slide's
-    /// friction put the max error at 4.3 % of the peak instead of 2.2 %).
+    /// threshold of 0.042), while the model ran on in the stuck phase (in predict mode up to
+    /// 2.4 % of the peak on the sample before the report). Its sliding side comes a sample
+    /// later ([`PhaseDetector::late_slip_start_accel`]) and the slide's friction from its
+    /// breakaway until then: in fuse mode read on the measured top; in predict mode on the
+    /// model's state, so there the sliding side replaces it a sample later (`ssvr_proto`'s
+    /// `BaseTuning::late_slide_side`). Every plan sets it (`ssvr_proto`'s `Plan::new`; fuse
+    /// mode's only while predict mode kept the breakaway's friction for the whole slide: the
+    /// default scene at 1 kHz with every accelerometer 0.05 g off and no rest then had its max
+    /// error at 4.3 % of the peak instead of 2.2 %).
     pub early_ramp_starts: bool,
 }
 

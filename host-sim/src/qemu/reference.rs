@@ -266,7 +266,10 @@ impl Reference {
                     if let (Some(d), Some(b)) = (late_demand.take(), base_tuning.as_mut()) {
                         if let Some(mu) = est.coefficient_of(d, f64::from(tracked.late_start_accel))
                         {
-                            b.late_slide_side(mu as f32);
+                            // (Predict mode: the slide's friction from its sliding side.)
+                            if let Some(mu) = b.late_slide_side(mu as f32) {
+                                est.set_friction(f64::from(mu));
+                            }
                         }
                     }
                 }

@@ -269,10 +269,15 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot> Model
         let (false, Some(b)) = (demand.is_nan(), self.base_tuning.get_mut()) else {
             return;
         };
-        // (The identifications' part of a slip start's sliding side: the slide's friction came
-        // from its breakaway.)
-        if let Some(mu) = self.est.coefficient_of(demand, slip_accel) {
-            b.late_slide_side(mu);
+        // (The identifications' part of a slip start's sliding side, and in predict mode the
+        // slide's friction from it: it came from the breakaway until now.)
+        let Some(mu_k) = self.est.coefficient_of(demand, slip_accel) else {
+            return;
+        };
+        // (No shift of the state's top, unlike an adoption's: the state came through the slip
+        // start from the stuck phase, and only one interval ran on the breakaway's friction.)
+        if let Some(mu) = b.late_slide_side(mu_k) {
+            self.est.set_friction(mu);
         }
     }
 

@@ -117,14 +117,25 @@ impl SlipStart {
 
 impl BaseTuning {
     /// The sliding side's kinetic coefficient `mu_k` of a slip start pushed without it (it came
-    /// a sample later: a strong jump breakaway confirmed at its second sample): what
+    /// a sample later: a strong breakaway confirmed at its second sample): what
     /// [`Self::slip_start`] does with it for the identifications (the slides' mean, the mass
-    /// residual); the slide's own friction came from the breakaway.
-    pub fn late_slide_side(&mut self, mu_k: f32) {
-        if self.plausible(f64::from(mu_k)) {
-            self.slides.push(mu_k);
-            self.mass_residual(mu_k);
+    /// residual), and in predict mode for the slide's own friction, which came from the
+    /// breakaway until now: the direction's coefficient from the sliding side, as
+    /// [`Self::slip_start`] would have set it, returned when it changed (the model uses it from
+    /// the next sample on). Fuse mode's slide keeps the breakaway's (read on the measured top).
+    pub fn late_slide_side(&mut self, mu_k: f32) -> Option<f32> {
+        if !self.plausible(f64::from(mu_k)) {
+            return None;
         }
+        self.slides.push(mu_k);
+        self.mass_residual(mu_k);
+        if self.fuse || self.level == 0 {
+            return None;
+        }
+        let before = self.mu_for(self.level);
+        self.predict_direction(self.level, self.near_prior(mu_k));
+        let mu = self.mu_for(self.level);
+        (mu != before).then_some(mu)
     }
 
     /// The prior's static friction coefficient `mu_s` (the tuning starts with μs = μ): a slip
@@ -169,16 +180,31 @@ impl BaseTuning {
         if !mu.is_finite() || level == 0 {
             return None;
         }
-        // Within the breakaway's own error of the prior: the prior's.
-        let prior = self.prior_mu as f32;
-        let mu = if (mu - prior).abs() < MIN_BREAKAWAY_CHANGE * prior {
-            prior
-        } else {
-            mu
-        };
+        let mu = self.near_prior(mu);
         if self.fuse {
             return (!at.adopted && self.plausible(mu as f64)).then_some(mu);
         }
+        self.predict_direction(level, mu);
+        None
+    }
+
+    /// A slip start's coefficient `mu`, the prior's when within the breakaway's own error of it
+    /// ([`MIN_BREAKAWAY_CHANGE`]).
+    fn near_prior(&self, mu: f32) -> f32 {
+        let prior = self.prior_mu as f32;
+        if (mu - prior).abs() < MIN_BREAKAWAY_CHANGE * prior {
+            prior
+        } else {
+            mu
+        }
+    }
+
+    /// Predict mode: a slip start's coefficient `mu` into phase `level` (its sliding side's, or
+    /// its breakaway's), within the breakaway's own error of the prior already taken for it,
+    /// blended with the prior by [`PREDICT_BREAKAWAY_WEIGHT`] until the other direction has its
+    /// own estimate, as that direction's level until it has its own ([`Self::mu_at_event`]).
+    fn predict_direction(&mut self, level: i8, mu: f32) {
+        let prior = self.prior_mu as f32;
         let i = if level > 0 { 0 } else { 1 };
         let own = self.mu_dir_std.get(i).is_some_and(|&s| s > 0.0);
         // Once the other direction has its own estimate from its slides (f and ξ adopted from
@@ -192,7 +218,6 @@ impl BaseTuning {
                 *s = if mu == prior { 0.0 } else { FROM_BREAKAWAY };
             }
         }
-        None
     }
 }
 
@@ -337,6 +362,38 @@ mod tests {
     }
 
     /// A slip start with its breakaway coefficient only (also the fuse mode's mean).
+    /// A slip start pushed without its sliding side (confirmed at its second sample): its
+    /// slide's level came from the breakaway; the sliding side a sample later replaces it in
+    /// predict mode, as [`BaseTuning::slip_start`] would have set it (blended, the prior's
+    /// within 5 %), and is returned when it changed. Fuse mode, a stuck phase, a coefficient
+    /// beyond a factor 2 of the prior's and a direction with its own estimate: nothing.
+    #[test]
+    fn a_late_sliding_side_replaces_the_breakaways_level() {
+        let mut b = BaseTuning::new(params(), 10_000.0, false, false, 37).unwrap();
+        start(&mut b, 1, 0.26, false);
+        b.event(1, 10.0);
+        assert!(close(b.mu_for(1), 0.2 + W * 0.06), "{}", b.mu_for(1));
+        let mu = b.late_slide_side(0.25).expect("a change");
+        assert!(close(mu, 0.2 + W * 0.05) && mu == b.mu_for(1), "{mu}");
+        assert_eq!(b.late_slide_side(0.25), None, "the same level");
+        assert_eq!(b.late_slide_side(0.205), Some(0.2), "within 5 %: the prior");
+        assert_eq!(b.late_slide_side(0.8), None);
+        assert_eq!(b.mu_for(1), 0.2);
+        assert_eq!(
+            b.slides.count(),
+            3,
+            "the plausible ones feed the slides' mean"
+        );
+        b.mu_dir_std[0] = 1e-3;
+        assert_eq!(b.late_slide_side(0.25), None, "its own estimate stays");
+        b.event(0, 10.0);
+        assert_eq!(b.late_slide_side(0.25), None, "stuck");
+        let mut f = BaseTuning::new(params(), 10_000.0, false, true, 37).unwrap();
+        f.event(1, 10.0);
+        assert_eq!(f.late_slide_side(0.25), None, "fuse mode");
+        assert_eq!(f.slides.count(), 1);
+    }
+
     fn start(b: &mut BaseTuning, level: i8, mu_s: f32, adopted: bool) -> Option<f32> {
         b.slip_start(&super::SlipStart {
             level,
