@@ -412,20 +412,8 @@ impl TrainFeeder {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::structure::StructureParams;
+    use crate::structure::{table1, StructureParams};
     use std::vec::Vec;
-
-    fn table1() -> Structure {
-        Structure::new(StructureParams {
-            m1_kg: 29.5,
-            m2_kg: 1.75,
-            natural_frequency_hz: 7.0,
-            damping_ratio: 0.05,
-            friction_coefficient: 0.2,
-            gravity_m_s2: 9.80665,
-        })
-        .unwrap()
-    }
 
     #[test]
     fn block_processing_equals_sample_processing() {

@@ -219,6 +219,14 @@ impl Structure {
     }
 }
 
+/// The paper's Table 1 specimen (m1 29.5 kg, m2 1.75 kg, 7 Hz, ξ 0.05, μ 0.2): the structure of
+/// the crate's unit tests.
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+pub(crate) fn table1() -> Structure {
+    Structure::new(tests::table1()).unwrap()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -127,11 +127,12 @@ fn check_common(v: &Value, samples: u64) {
     // strong jump breakaways confirmed at their second sample (the sliding side a sample
     // later, through the pipeline to the model); +0.7 KB in the seventeenth for the events'
     // kinks (two samples corrected at an event) and +1.3 KB for the rescaling at the table
-    // gain's adoption and the base's offset in the table's units; +0.3 KB in the eighteenth
-    // for predict mode's friction from a late sliding side (98 652 B on the default scene); the
-    // velocity-dependent law is compiled in only for a scene with one); the budget is 100 KiB,
-    // bounded here a little above the measured size so that a regression fails.
-    assert!(num(v, "board_flash_bytes") <= 96.6 * 1024.0);
+    // gain's adoption and the base's offset in the table's units; +0.9 KB in the eighteenth
+    // for predict mode's friction from a late sliding side, the slide re-run with it (99 252 B
+    // on the default scene); the velocity-dependent law is compiled in only for a scene with
+    // one); the budget is 100 KiB, bounded here a little above the measured size so that a
+    // regression fails.
+    assert!(num(v, "board_flash_bytes") <= 97.2 * 1024.0);
     assert!(num(v, "board_ram_bytes") <= 8.0 * 1024.0);
     // The model as the pipeline runs it, all identification on, against the budget of
     // 50 instructions per steady sample (reported, not met by the stick-slip and fixed-base

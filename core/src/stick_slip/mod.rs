@@ -90,6 +90,8 @@ mod step;
 mod update;
 
 #[cfg(test)]
+mod friction_tests;
+#[cfg(test)]
 mod tests;
 
 pub use coefficients::StickSlipCoefficients;

@@ -6,6 +6,7 @@ use super::estimator::sliding_observers;
 use super::estimator::StickSlipEstimator;
 use super::maps::{power, StuckMap};
 use super::observer::observer_gain;
+use super::packed;
 use crate::math::{Real, Transcendentals};
 
 /// The identification's n-step sliding maps of `c`, composed in f64 from the per-sample ones:
@@ -81,6 +82,51 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
         self.mu_use = mu;
         self.gmu = self.c.g * mu;
         self.set_drive();
+    }
+
+    /// [`Self::set_friction`] as if `mu` had been set before the last event was pushed (the
+    /// slip start or reversal that began the current slide): the intervals since it are
+    /// re-simulated with `mu`, as the event's own push re-simulated them, and `top_shift` (m/s²,
+    /// when finite) is added to the last sample's measured top acceleration, which the next
+    /// interval's correction reads (a measurement that is a model of the top with μ in it:
+    /// predict mode's momentum balance). For a slide whose friction is known a sample after its
+    /// start was pushed (the sliding side of a slip start confirmed at its second sample):
+    /// unlike [`Self::shift_top`] the state is not shifted, its slide re-run from the start
+    /// instead. Stuck, or the event beyond the history: [`Self::set_friction`] alone.
+    pub fn set_friction_since_event(&mut self, mu: T, top_shift: T) {
+        self.set_friction(mu);
+        if self.phase == 0 {
+            return;
+        }
+        if top_shift.is_finite() {
+            self.adjust_last(|s| s.y += top_shift);
+        }
+        let k = self.sample_index();
+        let limit = if k < self.len as u64 {
+            k
+        } else {
+            self.len as u64 - 1
+        };
+        // The event: a switch into the current phase inside the interval before the plain
+        // ones, else at the first plain sample.
+        let plain = packed::new(self.phase);
+        let (i, code) = match self.plain_from.checked_sub(1) {
+            Some(j) if k - j <= limit => {
+                let c = self.iv.get(self.slot_of(j)).copied().unwrap_or(plain);
+                if packed::switches(c) > 0 && packed::end(c) == self.phase {
+                    (j, c)
+                } else {
+                    (self.plain_from, plain)
+                }
+            }
+            _ => (self.plain_from, plain),
+        };
+        let back = k.saturating_sub(i);
+        if back < 2 || back > limit {
+            return;
+        }
+        self.resimulate(self.slot_of(i), back as usize, code);
+        self.set_fast_mode();
     }
 
     /// Add `d` (m/s²) to the top acceleration of the last sample's state (its relative velocity

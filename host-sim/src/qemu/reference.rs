@@ -267,8 +267,11 @@ impl Reference {
                         if let Some(mu) = est.coefficient_of(d, f64::from(tracked.late_start_accel))
                         {
                             // (Predict mode: the slide's friction from its sliding side.)
+                            let level = est.phase().level();
+                            let before = b.mu_for(level);
                             if let Some(mu) = b.late_slide_side(mu as f32) {
-                                est.set_friction(f64::from(mu));
+                                let d = b.top_shift(level, before);
+                                est.set_friction_since_event(f64::from(mu), f64::from(d));
                             }
                         }
                     }

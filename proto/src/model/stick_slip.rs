@@ -274,10 +274,15 @@ impl<const H: usize, const EVENTS: bool, F: FrictionSlot, B: BaseSlot> Model
         let Some(mu_k) = self.est.coefficient_of(demand, slip_accel) else {
             return;
         };
-        // (No shift of the state's top, unlike an adoption's: the state came through the slip
-        // start from the stuck phase, and only one interval ran on the breakaway's friction.)
+        // (The slide re-run from its start with it, as if it had come with the slip start;
+        // the last sample's momentum-balance top, which the next interval reads, moved with
+        // it. Not an adoption's shift of the state's top: the state came through the slip
+        // start from the stuck phase.)
+        let level = self.est.phase().level();
+        let before = b.mu_for(level);
         if let Some(mu) = b.late_slide_side(mu_k) {
-            self.est.set_friction(mu);
+            self.est
+                .set_friction_since_event(mu, b.top_shift(level, before));
         }
     }
 
