@@ -92,7 +92,10 @@ impl<T: Real, M: Transcendentals<T>, const H: usize> StickSlipEstimator<T, M, H>
     /// predict mode's momentum balance). For a slide whose friction is known a sample after its
     /// start was pushed (the sliding side of a slip start confirmed at its second sample):
     /// unlike [`Self::shift_top`] the state is not shifted, its slide re-run from the start
-    /// instead. Stuck, or the event beyond the history: [`Self::set_friction`] alone.
+    /// instead. Stuck: [`Self::set_friction`] alone (the top shift ignored). Sliding with the
+    /// event beyond the history: the friction set and the top shifted, nothing re-run (an event
+    /// inside the interval just beyond it: the re-run from the first plain sample on); the
+    /// model calls it a sample after the event, well within the history.
     pub fn set_friction_since_event(&mut self, mu: T, top_shift: T) {
         self.set_friction(mu);
         if self.phase == 0 {
