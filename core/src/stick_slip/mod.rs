@@ -90,8 +90,6 @@ mod step;
 mod update;
 
 #[cfg(test)]
-mod friction_tests;
-#[cfg(test)]
 mod tests;
 
 pub use coefficients::StickSlipCoefficients;
