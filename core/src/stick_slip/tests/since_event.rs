@@ -102,8 +102,12 @@ fn friction_since_the_event_is_as_if_set_before_it() {
     e.set_friction(0.25);
     let want = run::<10>(33, 1.6, 1, true, false);
     assert!(want.iter().all(|x| x.is_finite()));
-    let diff = (34..234)
+    let got: Vec<f64> = (34..234)
         .map(|k| e.update(inputs(k, false).0, f64::NAN))
+        .collect();
+    assert!(got.iter().all(|x| x.is_finite()));
+    let diff = got
+        .iter()
         .zip(&want)
         .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
     assert!(diff > 0.05, "{diff:e}");

@@ -121,8 +121,9 @@ impl BaseTuning {
     /// [`Self::slip_start`] does with it for the identifications (the slides' mean, the mass
     /// residual), and in predict mode for the slide's own friction, which came from the
     /// breakaway until now: the direction's coefficient from the sliding side, as
-    /// [`Self::slip_start`] would have set it, returned when it changed (the model uses it from
-    /// the next sample on). Fuse mode's slide keeps the breakaway's (read on the measured top).
+    /// [`Self::slip_start`] would have set it, returned when it changed (the model re-runs the
+    /// slide from its start with it). Fuse mode's slide keeps the breakaway's (read on the
+    /// measured top).
     pub fn late_slide_side(&mut self, mu_k: f32) -> Option<f32> {
         if !self.plausible(f64::from(mu_k)) {
             return None;
@@ -361,7 +362,6 @@ mod tests {
         );
     }
 
-    /// A slip start with its breakaway coefficient only (also the fuse mode's mean).
     /// A slip start pushed without its sliding side (confirmed at its second sample): its
     /// slide's level came from the breakaway; the sliding side a sample later replaces it in
     /// predict mode, as [`BaseTuning::slip_start`] would have set it (blended, the prior's
@@ -394,6 +394,7 @@ mod tests {
         assert_eq!(f.slides.count(), 1);
     }
 
+    /// A slip start with its breakaway coefficient only (also the fuse mode's mean).
     fn start(b: &mut BaseTuning, level: i8, mu_s: f32, adopted: bool) -> Option<f32> {
         b.slip_start(&super::SlipStart {
             level,
